@@ -1,0 +1,25 @@
+//! flarebench-sdk: the optics core shared by every flare algorithm and the workbench.
+//!
+//! - [`system`]: the lens prescription model ([`LensSystem`], [`Surface`]) and its validation.
+//! - [`glass`]: dispersion — the exact two-term Cauchy fit from nd/Vd and the refractiveindex.info
+//!   catalogue formulas for 1613 named glasses.
+//! - [`io`]: reading and writing lens files (OpenLensFlare XML and our superset of it).
+//! - [`trace`]: the sequential ray tracer (scalar f64, batched structure-of-arrays f32/f64).
+//! - [`fresnel`] and [`coating`]: interface reflectance, bare and with thin-film coatings.
+//! - [`paraxial`]: first-order analysis (focal lengths, pupils, f-number, Petzval sum).
+//!
+//! Conventions (docs/ARCHITECTURE.md): millimetres, nanometres for wavelengths, radians inside;
+//! surfaces are listed object side first; curvature `c = 1/R` with `R > 0` meaning the centre of
+//! curvature lies toward the sensor; the optical axis is +z toward the sensor.
+
+pub mod coating;
+pub mod fresnel;
+pub mod glass;
+pub mod io;
+pub mod paraxial;
+pub mod spectrum;
+pub mod system;
+pub mod trace;
+
+pub use glass::{Dispersion, GlassCatalog};
+pub use system::{Coating, LensSystem, Medium, Surface, SurfaceKind};

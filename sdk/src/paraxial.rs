@@ -1,0 +1,1 @@
+//! Paraxial analysis.
