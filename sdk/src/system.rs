@@ -228,6 +228,21 @@ impl std::fmt::Display for ValidationIssue {
 }
 
 impl LensSystem {
+    /// A system with the given surfaces, a 36 × 24 mm film and no f-number setting.
+    pub fn new(name: &str, surfaces: Vec<Surface>) -> Self {
+        LensSystem {
+            name: name.to_string(),
+            f_number: None,
+            stated_efl_mm: None,
+            field_of_view_deg: None,
+            film_width_mm: 36.0,
+            film_height_mm: 24.0,
+            notes: String::new(),
+            source: String::new(),
+            surfaces,
+        }
+    }
+
     /// Index of the aperture stop, if there is one.
     pub fn stop_index(&self) -> Option<usize> {
         self.surfaces

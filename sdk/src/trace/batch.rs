@@ -1,0 +1,214 @@
+//! Batched tracing in structure-of-arrays packets (AoSoA): `LANES` rays per packet, one array
+//! per coordinate, so the per-ray physics compiles to SIMD; packets are spread over cores
+//! with rayon. No allocation happens while tracing.
+
+use rayon::prelude::*;
+
+use super::fate::Fate;
+use super::lane::{self, REFLECT, REFRACT, SENSOR, advance};
+use super::real::Real;
+use super::sequence::{Interaction, Sequence, Step};
+
+/// Rays per packet.
+pub const LANES: usize = 64;
+
+/// Set in a fate code once tracing of that ray has stopped.
+const TERMINATED: u32 = 1 << 31;
+
+/// `LANES` rays in structure-of-arrays form.
+#[derive(Clone, Debug)]
+pub struct Packet<T> {
+    pub x: [T; LANES],
+    pub y: [T; LANES],
+    pub z: [T; LANES],
+    pub dx: [T; LANES],
+    pub dy: [T; LANES],
+    pub dz: [T; LANES],
+    /// Largest squared relative radius met so far.
+    pub max_rel2: [T; LANES],
+    /// Encoded [`Fate`] (first event) plus a terminated flag.
+    pub fate: [u32; LANES],
+}
+
+impl<T: Real> Default for Packet<T> {
+    fn default() -> Self {
+        let z = [T::zero(); LANES];
+        Packet {
+            x: z,
+            y: z,
+            z,
+            dx: z,
+            dy: z,
+            dz: [T::one(); LANES],
+            max_rel2: z,
+            fate: [0; LANES],
+        }
+    }
+}
+
+/// A batch of rays in packets. Rays past `len` in the last packet are padding.
+#[derive(Clone, Debug, Default)]
+pub struct RayBatch<T> {
+    packets: Vec<Packet<T>>,
+    len: usize,
+}
+
+impl<T: Real> RayBatch<T> {
+    /// An empty batch with room for `n` rays.
+    pub fn with_capacity(n: usize) -> Self {
+        RayBatch {
+            packets: Vec::with_capacity(n.div_ceil(LANES)),
+            len: 0,
+        }
+    }
+
+    /// Number of rays.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// True when the batch holds no ray.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Removes every ray, keeping the memory.
+    pub fn clear(&mut self) {
+        self.packets.clear();
+        self.len = 0;
+    }
+
+    /// Adds a ray at `origin` with unit direction `dir`.
+    pub fn push(&mut self, origin: [T; 3], dir: [T; 3]) {
+        let lane = self.len % LANES;
+        if lane == 0 {
+            self.packets.push(Packet::default());
+        }
+        let p = self.packets.last_mut().expect("a packet was just ensured");
+        (p.x[lane], p.y[lane], p.z[lane]) = (origin[0], origin[1], origin[2]);
+        (p.dx[lane], p.dy[lane], p.dz[lane]) = (dir[0], dir[1], dir[2]);
+        p.max_rel2[lane] = T::zero();
+        p.fate[lane] = 0;
+        self.len += 1;
+    }
+
+    /// The packets (for kernels that read the rays in SoA form).
+    pub fn packets(&self) -> &[Packet<T>] {
+        &self.packets
+    }
+
+    /// Position, direction, fate and largest relative radius of ray `i`.
+    pub fn get(&self, i: usize) -> ([T; 3], [T; 3], Fate, T) {
+        assert!(i < self.len, "ray {i} of {}", self.len);
+        let (p, l) = (&self.packets[i / LANES], i % LANES);
+        (
+            [p.x[l], p.y[l], p.z[l]],
+            [p.dx[l], p.dy[l], p.dz[l]],
+            Fate::decode(p.fate[l]),
+            p.max_rel2[l].sqrt(),
+        )
+    }
+
+    /// True when ray `i` carried out every step (it met the last surface, possibly after being
+    /// vignetted).
+    pub fn completed(&self, i: usize) -> bool {
+        self.packets[i / LANES].fate[i % LANES] & TERMINATED == 0
+    }
+}
+
+impl<T: Real> Sequence<T> {
+    /// Traces every ray of `batch` through the sequence, in place, on all cores.
+    pub fn trace_batch(&self, batch: &mut RayBatch<T>) {
+        batch
+            .packets
+            .par_iter_mut()
+            .with_min_len(4)
+            .for_each(|p| self.trace_packet(p));
+    }
+
+    /// Traces every ray of `batch` on the calling thread only.
+    pub fn trace_batch_serial(&self, batch: &mut RayBatch<T>) {
+        batch.packets.iter_mut().for_each(|p| self.trace_packet(p));
+    }
+
+    /// Traces one packet through every step.
+    pub fn trace_packet(&self, p: &mut Packet<T>) {
+        for s in &self.steps {
+            match (s.interaction, s.aspheric) {
+                (Interaction::Refract, false) => step_packet::<T, REFRACT, false>(s, p),
+                (Interaction::Refract, true) => step_packet::<T, REFRACT, true>(s, p),
+                (Interaction::Reflect, false) => step_packet::<T, REFLECT, false>(s, p),
+                (Interaction::Reflect, true) => step_packet::<T, REFLECT, true>(s, p),
+                (Interaction::Sensor, false) => step_packet::<T, SENSOR, false>(s, p),
+                (Interaction::Sensor, true) => step_packet::<T, SENSOR, true>(s, p),
+            }
+        }
+    }
+}
+
+#[inline(always)]
+fn step_packet<T: Real, const MODE: u8, const ASPH: bool>(s: &Step<T>, p: &mut Packet<T>) {
+    let surface = s.surface;
+    let vignetted = Fate::Vignetted { surface }.encode();
+    let missed = Fate::Missed { surface }.encode();
+    let tir = Fate::TotalInternalReflection { surface }.encode();
+    let no_convergence = Fate::NoConvergence { surface }.encode();
+    for i in 0..LANES {
+        let mut pos = [p.x[i], p.y[i], p.z[i]];
+        let mut dir = [p.dx[i], p.dy[i], p.dz[i]];
+        let out = advance::<T, MODE, ASPH>(s, &mut pos, &mut dir);
+        let fate = p.fate[i];
+        let alive = fate & TERMINATED == 0;
+        let ok = out.status == lane::OK;
+        let upd = alive && ok;
+        let rel2 = out.r2 * s.inv_semi2;
+        p.x[i] = if upd { pos[0] } else { p.x[i] };
+        p.y[i] = if upd { pos[1] } else { p.y[i] };
+        p.z[i] = if upd { pos[2] } else { p.z[i] };
+        p.dx[i] = if upd { dir[0] } else { p.dx[i] };
+        p.dy[i] = if upd { dir[1] } else { p.dy[i] };
+        p.dz[i] = if upd { dir[2] } else { p.dz[i] };
+        p.max_rel2[i] = if upd && rel2 > p.max_rel2[i] {
+            rel2
+        } else {
+            p.max_rel2[i]
+        };
+        let fail_code = match out.status {
+            lane::TIR => tir,
+            lane::NO_CONVERGENCE => no_convergence,
+            _ => missed,
+        };
+        let first = if fate & !TERMINATED == 0 {
+            if !ok {
+                fail_code
+            } else if rel2 > T::one() {
+                vignetted
+            } else {
+                0
+            }
+        } else {
+            fate & !TERMINATED
+        };
+        let term = if ok { 0 } else { TERMINATED };
+        p.fate[i] = if alive { first | term } else { fate };
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fate_codes_round_trip() {
+        for f in [
+            Fate::Sensor,
+            Fate::Vignetted { surface: 3 },
+            Fate::Missed { surface: 0 },
+            Fate::TotalInternalReflection { surface: 21 },
+            Fate::NoConvergence { surface: 7 },
+        ] {
+            assert_eq!(Fate::decode(f.encode()), f);
+            assert_eq!(Fate::decode(f.encode() | TERMINATED), f);
+        }
+    }
+}

@@ -1,0 +1,186 @@
+//! The per-ray physics of one step, shared by the scalar and the batched tracers.
+//!
+//! Written without early returns so that, inlined into a loop over a packet of rays, it
+//! compiles to straight-line SIMD code for spherical and conic surfaces.
+
+use super::real::Real;
+use super::sequence::{Interaction, Step};
+
+/// Outcome codes of one step.
+pub(crate) const OK: u8 = 0;
+pub(crate) const MISSED: u8 = 1;
+pub(crate) const TIR: u8 = 2;
+pub(crate) const NO_CONVERGENCE: u8 = 3;
+
+/// Maximum Newton iterations for an even asphere.
+const NEWTON_MAX_ITER: usize = 32;
+
+/// What one step did to one ray.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct StepOut<T> {
+    pub status: u8,
+    /// Squared radial distance of the hit from the axis.
+    pub r2: T,
+    /// |cos| of the angle of incidence (for Fresnel).
+    pub cos_i: T,
+}
+
+/// Interaction codes for the const-generic kernel.
+pub(crate) const REFRACT: u8 = 0;
+pub(crate) const REFLECT: u8 = 1;
+pub(crate) const SENSOR: u8 = 2;
+
+/// [`advance`] with the interaction and the asphere flag chosen at run time (scalar use).
+#[inline]
+pub(crate) fn advance_dyn<T: Real>(s: &Step<T>, p: &mut [T; 3], d: &mut [T; 3]) -> StepOut<T> {
+    match (s.interaction, s.aspheric) {
+        (Interaction::Refract, false) => advance::<T, REFRACT, false>(s, p, d),
+        (Interaction::Refract, true) => advance::<T, REFRACT, true>(s, p, d),
+        (Interaction::Reflect, false) => advance::<T, REFLECT, false>(s, p, d),
+        (Interaction::Reflect, true) => advance::<T, REFLECT, true>(s, p, d),
+        (Interaction::Sensor, false) => advance::<T, SENSOR, false>(s, p, d),
+        (Interaction::Sensor, true) => advance::<T, SENSOR, true>(s, p, d),
+    }
+}
+
+/// Intersects the ray `(p, d)` (`d` a unit vector) with the surface of `s` and applies the
+/// interaction `MODE` (`REFRACT`, `REFLECT`, `SENSOR`); `ASPH` enables the even-asphere
+/// refinement. `p` and `d` are updated in place; on failure they hold unspecified values and
+/// `status` says why.
+#[inline(always)]
+pub(crate) fn advance<T: Real, const MODE: u8, const ASPH: bool>(
+    s: &Step<T>,
+    p: &mut [T; 3],
+    d: &mut [T; 3],
+) -> StepOut<T> {
+    let one = T::one();
+    let zero = T::zero();
+    let two = one + one;
+    let [dx, dy, dz] = *d;
+    // 1. Transfer to the vertex tangent plane (vertex-local coordinates).
+    let t0 = (s.z - p[2]) / dz;
+    let x = p[0] + t0 * dx;
+    let y = p[1] + t0 * dy;
+    // 2. Conic: A t² − 2B t + C = 0 with |d| = 1.
+    let (c, k) = (s.c, s.k);
+    let a = c * (one + k * dz * dz);
+    let b = dz - c * (x * dx + y * dy);
+    let q = c * (x * x + y * y);
+    let disc = b * b - a * q;
+    let sq = disc.max(zero).sqrt();
+    let den = b + sq.copysign(b);
+    let t1 = q / den;
+    let mut hx = x + t1 * dx;
+    let mut hy = y + t1 * dy;
+    let mut hz = t1 * dz;
+    let mut status = if disc >= zero && t1.is_finite() && t0.is_finite() {
+        OK
+    } else {
+        MISSED
+    };
+    // 3. Surface normal (unnormalised), pointing to +z at the vertex.
+    let (mut nx, mut ny, mut nz) = (-c * hx, -c * hy, one - c * (one + k) * hz);
+    if ASPH {
+        // Start from the conic hit, or from the tangent plane when the conic was missed.
+        let start = if status == OK {
+            [hx, hy, hz]
+        } else {
+            [x, y, zero]
+        };
+        match refine_asphere(s, start, [dx, dy, dz]) {
+            Some((h, n)) => {
+                [hx, hy, hz] = h;
+                [nx, ny, nz] = n;
+                if t0.is_finite() {
+                    status = OK;
+                }
+            }
+            None => status = status.max(NO_CONVERGENCE),
+        }
+    }
+    let inv = one / (nx * nx + ny * ny + nz * nz).sqrt();
+    let (nx, ny, nz) = (nx * inv, ny * inv, nz * inv);
+    let dn = dx * nx + dy * ny + dz * nz;
+    let cos_i = dn.abs();
+    // 4. Interaction.
+    match MODE {
+        REFRACT => {
+            let eta = s.eta;
+            let kk = one - eta * eta * (one - cos_i * cos_i);
+            if !(kk >= zero) && status == OK {
+                status = TIR;
+            }
+            let cos_t = kk.max(zero).sqrt();
+            // Normal oriented along the travel direction.
+            let g = (cos_t - eta * cos_i) * one.copysign(dn);
+            *d = [eta * dx + g * nx, eta * dy + g * ny, eta * dz + g * nz];
+        }
+        REFLECT => {
+            let g = two * dn;
+            *d = [dx - g * nx, dy - g * ny, dz - g * nz];
+        }
+        _ => {}
+    }
+    *p = [hx, hy, hz + s.z];
+    StepOut {
+        status,
+        r2: hx * hx + hy * hy,
+        cos_i,
+    }
+}
+
+/// Newton's method on `F(t) = z(t) − sag(r(t)²)` from the conic hit `h` (vertex-local).
+/// Returns the hit and the unnormalised normal, or `None` when it does not converge.
+#[inline(never)]
+fn refine_asphere<T: Real>(s: &Step<T>, h: [T; 3], d: [T; 3]) -> Option<([T; 3], [T; 3])> {
+    let one = T::one();
+    let two = one + one;
+    let (c, k) = (s.c, s.k);
+    let sag_and_slope = |r2: T| -> Option<(T, T)> {
+        // Conic part and d(sag)/d(r²).
+        let arg = one - (one + k) * c * c * r2;
+        if !(arg >= T::zero()) {
+            return None;
+        }
+        let root = arg.sqrt();
+        let mut sag = c * r2 / (one + root);
+        let mut slope = if root > T::zero() {
+            c / (two * root)
+        } else {
+            T::infinity()
+        };
+        let mut pw = one; // (r²)^(i−1)
+        for (i, &a) in s.asph.iter().enumerate() {
+            let ii = T::of((i + 1) as f64);
+            slope = slope + ii * a * pw;
+            pw = pw * r2;
+            sag = sag + a * pw;
+        }
+        Some((sag, slope))
+    };
+    let [mut x, mut y, mut z] = h;
+    // If the conic itself was missed, start from the tangent-plane point instead.
+    if !(x.is_finite() && y.is_finite() && z.is_finite()) {
+        return None;
+    }
+    for _ in 0..NEWTON_MAX_ITER {
+        let r2 = x * x + y * y;
+        let (sag, slope) = sag_and_slope(r2)?;
+        let f = z - sag;
+        let fp = d[2] - slope * two * (x * d[0] + y * d[1]);
+        if !(fp.abs() > T::zero()) {
+            return None;
+        }
+        let dt = f / fp;
+        x = x - dt * d[0];
+        y = y - dt * d[1];
+        z = z - dt * d[2];
+        if dt.abs() <= T::NEWTON_TOL {
+            let r2 = x * x + y * y;
+            let (_, slope) = sag_and_slope(r2)?;
+            let g = two * slope;
+            return Some(([x, y, z], [-g * x, -g * y, one]));
+        }
+    }
+    None
+}

@@ -1,0 +1,25 @@
+//! Sequential ray tracing through a lens, forward, backward and along ghost paths.
+//!
+//! A [`Sequence`] is the list of surface interactions for one wavelength (refract, reflect,
+//! sensor), with the geometry and indices each needs. The same per-ray physics (see `lane`)
+//! serves the scalar f64 API ([`Sequence::trace`]) and the batched structure-of-arrays APIs in
+//! f32 and f64 ([`RayBatch`], [`Sequence::trace_batch`]).
+//!
+//! Intersection is vertex-local and curvature-based (Spencer & Murty 1962): the ray is first
+//! moved to the vertex tangent plane, then the conic `c(x² + y²) + c(1+k)z² − 2z = 0` is solved
+//! as `t = C / (B + sign(B)·√(B² − AC))`, which picks the sheet through the vertex in either
+//! direction of travel and becomes the plane as `c → 0`. Even aspheres are refined by Newton's
+//! method from the conic hit, with an iteration cap and a typed failure.
+
+mod batch;
+mod fate;
+mod lane;
+mod real;
+mod scalar;
+mod sequence;
+
+pub use batch::{LANES, Packet, RayBatch};
+pub use fate::Fate;
+pub use real::Real;
+pub use scalar::{Hit, Ray, TraceResult};
+pub use sequence::{Interaction, PathError, Sequence, Step};

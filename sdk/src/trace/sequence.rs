@@ -1,0 +1,214 @@
+//! Interaction sequences: which surfaces a ray meets, in what order, and how.
+
+use super::real::Real;
+use crate::system::{Coating, LensSystem, SurfaceKind};
+
+/// What happens at a step.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Interaction {
+    /// Refraction into the medium on the far side.
+    Refract,
+    /// Specular reflection back into the medium the ray came from.
+    Reflect,
+    /// The sensor plane: the ray is stopped there, nothing else happens.
+    Sensor,
+}
+
+/// One surface interaction with everything the per-ray physics needs, in the tracer's float.
+#[derive(Clone, Copy, Debug)]
+pub struct Step<T> {
+    /// Index of the surface in the [`LensSystem`].
+    pub surface: usize,
+    pub interaction: Interaction,
+    /// True when the ray travels toward the sensor (+z order) as it arrives.
+    pub forward: bool,
+    /// Vertex position on the axis (mm).
+    pub z: T,
+    /// Curvature (1/mm) and conic constant.
+    pub c: T,
+    pub k: T,
+    /// Even-asphere coefficients of r², …, r¹⁶, used when `aspheric`.
+    pub asph: [T; 8],
+    pub aspheric: bool,
+    /// Clear semi-diameter here (the working opening for the stop); `inv_semi2` = 1/semi²,
+    /// 0 where nothing clips (the sensor).
+    pub semi: T,
+    pub inv_semi2: T,
+    /// Index on the arrival side and on the far side (for a reflection, the far side is the
+    /// medium the ray does not enter; Fresnel needs it).
+    pub n_from: f64,
+    pub n_to: f64,
+    /// `n_from / n_to`, the refraction ratio.
+    pub eta: T,
+}
+
+/// Why a path could not be built.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum PathError {
+    #[error("surface {0} does not exist or cannot reflect (only refracting surfaces can)")]
+    NotReflecting(usize),
+    #[error(
+        "a ghost reflects first at a later surface, then at an earlier one: got {first} then {second}"
+    )]
+    Order { first: usize, second: usize },
+    #[error("surface {0} is out of range")]
+    OutOfRange(usize),
+}
+
+/// The interactions a ray goes through for one wavelength.
+#[derive(Clone, Debug)]
+pub struct Sequence<T> {
+    pub steps: Vec<Step<T>>,
+    pub lambda_nm: f64,
+    /// The coating of each surface of the system (for intensities along the path).
+    pub coatings: Vec<Coating>,
+}
+
+impl Sequence<f64> {
+    /// Object space to the sensor, refracting at every surface; the stop clips at its working
+    /// opening (the system's f-number setting).
+    pub fn forward(system: &LensSystem, lambda_nm: f64) -> Self {
+        let sensor = system.sensor_index();
+        let mut path: Vec<(usize, Interaction)> =
+            (0..sensor).map(|s| (s, Interaction::Refract)).collect();
+        path.push((sensor, Interaction::Sensor));
+        Self::build(system, lambda_nm, true, &path)
+    }
+
+    /// A two-reflection ghost: forward to surface `first`, reflect; back to `second < first`,
+    /// reflect; forward to the sensor.
+    pub fn ghost(
+        system: &LensSystem,
+        lambda_nm: f64,
+        first: usize,
+        second: usize,
+    ) -> Result<Self, PathError> {
+        let sensor = system.sensor_index();
+        for s in [first, second] {
+            if s >= sensor || system.surfaces[s].kind != SurfaceKind::Refracting {
+                return Err(PathError::NotReflecting(s));
+            }
+        }
+        if second >= first {
+            return Err(PathError::Order { first, second });
+        }
+        let mut path: Vec<(usize, Interaction)> =
+            (0..first).map(|s| (s, Interaction::Refract)).collect();
+        path.push((first, Interaction::Reflect));
+        path.extend((second + 1..first).rev().map(|s| (s, Interaction::Refract)));
+        path.push((second, Interaction::Reflect));
+        path.extend((second + 1..sensor).map(|s| (s, Interaction::Refract)));
+        path.push((sensor, Interaction::Sensor));
+        Ok(Self::build(system, lambda_nm, true, &path))
+    }
+
+    /// An arbitrary sequence. `start_forward` says whether the ray starts travelling toward
+    /// the sensor; it flips at each reflection.
+    pub fn custom(
+        system: &LensSystem,
+        lambda_nm: f64,
+        start_forward: bool,
+        path: &[(usize, Interaction)],
+    ) -> Result<Self, PathError> {
+        if let Some(&(s, _)) = path.iter().find(|(s, _)| *s >= system.surfaces.len()) {
+            return Err(PathError::OutOfRange(s));
+        }
+        Ok(Self::build(system, lambda_nm, start_forward, path))
+    }
+
+    fn build(
+        system: &LensSystem,
+        lambda_nm: f64,
+        start_forward: bool,
+        path: &[(usize, Interaction)],
+    ) -> Self {
+        let n = system.indices(lambda_nm);
+        let z = system.vertex_z();
+        let stop_semi = crate::paraxial::stop_opening(system);
+        let mut forward = start_forward;
+        let steps = path
+            .iter()
+            .map(|&(s, interaction)| {
+                let surf = &system.surfaces[s];
+                // n[s] is before surface s, n[s + 1] after it.
+                let (n_from, n_to) = if forward {
+                    (n[s], n[s + 1])
+                } else {
+                    (n[s + 1], n[s])
+                };
+                let semi = match surf.kind {
+                    SurfaceKind::ApertureStop => stop_semi,
+                    _ => surf.semi_diameter,
+                };
+                let inv_semi2 = if interaction == Interaction::Sensor || semi <= 0.0 {
+                    0.0
+                } else {
+                    1.0 / (semi * semi)
+                };
+                let step = Step {
+                    surface: s,
+                    interaction,
+                    forward,
+                    z: z[s],
+                    c: surf.curvature,
+                    k: surf.conic,
+                    asph: surf.aspheric,
+                    aspheric: surf.aspheric.iter().any(|&a| a != 0.0),
+                    semi,
+                    inv_semi2,
+                    n_from,
+                    n_to,
+                    eta: n_from / n_to,
+                };
+                if interaction == Interaction::Reflect {
+                    forward = !forward;
+                }
+                step
+            })
+            .collect();
+        Sequence {
+            steps,
+            lambda_nm,
+            coatings: system.surfaces.iter().map(|s| s.coating.clone()).collect(),
+        }
+    }
+
+    /// The same sequence in another float type (geometry rounded once, here).
+    pub fn cast<U: Real>(&self) -> Sequence<U> {
+        Sequence {
+            steps: self
+                .steps
+                .iter()
+                .map(|s| Step {
+                    surface: s.surface,
+                    interaction: s.interaction,
+                    forward: s.forward,
+                    z: U::of(s.z),
+                    c: U::of(s.c),
+                    k: U::of(s.k),
+                    asph: s.asph.map(U::of),
+                    aspheric: s.aspheric,
+                    semi: U::of(s.semi),
+                    inv_semi2: U::of(s.inv_semi2),
+                    n_from: s.n_from,
+                    n_to: s.n_to,
+                    eta: U::of(s.eta),
+                })
+                .collect(),
+            lambda_nm: self.lambda_nm,
+            coatings: self.coatings.clone(),
+        }
+    }
+}
+
+impl<T: Real> Sequence<T> {
+    /// Number of ray–surface steps per ray.
+    pub fn len(&self) -> usize {
+        self.steps.len()
+    }
+
+    /// True when there are no steps.
+    pub fn is_empty(&self) -> bool {
+        self.steps.is_empty()
+    }
+}

@@ -1,0 +1,288 @@
+//! The tracer and the paraxial analysis against closed-form optics.
+
+use flarebench_sdk::paraxial::analyse;
+use flarebench_sdk::trace::{Fate, Interaction, Ray, RayBatch, Sequence};
+use flarebench_sdk::{LensSystem, Medium, Surface};
+use glam::DVec3;
+
+const LAMBDA: f64 = 587.5618;
+
+fn glass(nd: f64) -> Medium {
+    Medium::Model { nd, vd: None }
+}
+
+/// A single thick lens (R1, R2, centre thickness t, index n) with the stop at its front
+/// vertex and the sensor at `image_distance` behind it.
+fn thick_lens(r1: f64, r2: f64, t: f64, n: f64, image_distance: f64) -> LensSystem {
+    LensSystem::new(
+        "thick lens",
+        vec![
+            Surface::stop(0.0, 5.0),
+            Surface::spherical(r1, t, glass(n), 10.0),
+            Surface::spherical(r2, image_distance, Medium::Air, 10.0),
+            Surface::sensor(20.0),
+        ],
+    )
+}
+
+/// Lensmaker's equation for a thick lens in air.
+fn lensmaker(r1: f64, r2: f64, t: f64, n: f64) -> f64 {
+    let p = (n - 1.0) * (1.0 / r1 - 1.0 / r2 + (n - 1.0) * t / (n * r1 * r2));
+    1.0 / p
+}
+
+#[test]
+fn thin_lens_focal_length_matches_lensmaker() {
+    // A very thin biconvex lens: f = 1 / ((n−1)(1/R1 − 1/R2)).
+    let (r1, r2, n) = (100.0, -100.0, 1.5);
+    let sys = thick_lens(r1, r2, 1e-6, n, 100.0);
+    let p = analyse(&sys, LAMBDA).unwrap();
+    let thin = 1.0 / ((n - 1.0) * (1.0 / r1 - 1.0 / r2));
+    assert!((p.efl_mm - thin).abs() < 1e-5, "{} vs {thin}", p.efl_mm);
+}
+
+#[test]
+fn thick_lens_efl_and_bfl_match_closed_form() {
+    let (r1, r2, t, n) = (50.0, -80.0, 8.0, 1.6);
+    let sys = thick_lens(r1, r2, t, n, 60.0);
+    let p = analyse(&sys, LAMBDA).unwrap();
+    let f = lensmaker(r1, r2, t, n);
+    assert!((p.efl_mm - f).abs() < 1e-9, "EFL {} vs {f}", p.efl_mm);
+    // Principal plane H′ lies −f (n−1) t / (n R1) from the rear vertex.
+    let bfl = f - f * (n - 1.0) * t / (n * r1);
+    assert!((p.bfl_mm - bfl).abs() < 1e-9, "BFL {} vs {bfl}", p.bfl_mm);
+    let ffl = f + f * (n - 1.0) * t / (n * r2);
+    assert!((p.ffl_mm - ffl).abs() < 1e-9, "FFL {} vs {ffl}", p.ffl_mm);
+}
+
+#[test]
+fn ball_lens_efl_is_nd_over_two_n_minus_one() {
+    // A sphere of radius R: EFL = n R / (2 (n − 1)), measured from the centre.
+    let (r, n) = (5.0, 1.5168);
+    let sys = LensSystem::new(
+        "ball",
+        vec![
+            Surface::spherical(r, 2.0 * r, glass(n), 4.9),
+            Surface::stop(0.0, 4.0),
+            Surface::sensor(5.0),
+        ],
+    );
+    // Put the stop right after the ball: move the back surface before it.
+    let mut sys = sys;
+    sys.surfaces
+        .insert(1, Surface::spherical(-r, 0.0, Medium::Air, 4.9));
+    sys.surfaces[0].thickness = 2.0 * r;
+    sys.surfaces[2].thickness = 10.0;
+    let p = analyse(&sys, LAMBDA).unwrap();
+    let want = n * r / (2.0 * (n - 1.0));
+    assert!((p.efl_mm - want).abs() < 1e-12, "{} vs {want}", p.efl_mm);
+    assert!((p.bfl_mm - (want - r)).abs() < 1e-12);
+}
+
+#[test]
+fn plane_parallel_plate_shifts_focus_by_t_times_one_minus_one_over_n() {
+    // A perfect thin lens cannot be built from spheres, so compare a lens with and without a
+    // plate behind it: the plate has no power and moves the focus by t (1 − 1/n).
+    let (t, n) = (10.0, 1.7);
+    let lens = thick_lens(60.0, -60.0, 4.0, 1.5, 80.0);
+    let mut with_plate = lens.clone();
+    with_plate.surfaces[2].thickness = 5.0;
+    with_plate
+        .surfaces
+        .insert(3, Surface::spherical(0.0, t, glass(n), 15.0));
+    with_plate
+        .surfaces
+        .insert(4, Surface::spherical(0.0, 50.0, Medium::Air, 15.0));
+    let a = analyse(&lens, LAMBDA).unwrap();
+    let b = analyse(&with_plate, LAMBDA).unwrap();
+    assert!((a.efl_mm - b.efl_mm).abs() < 1e-12, "a plate has no power");
+    // Focus position from the lens's rear vertex.
+    let focus_a = a.bfl_mm;
+    let focus_b = 5.0 + t + b.bfl_mm;
+    assert!((focus_b - focus_a - t * (1.0 - 1.0 / n)).abs() < 1e-12);
+    // And the real tracer agrees: a paraxial ray through the plate lands at that focus.
+    let seq = Sequence::forward(&with_plate, LAMBDA);
+    let mut sys_focus = with_plate.clone();
+    let last = sys_focus.surfaces.len() - 2;
+    sys_focus.surfaces[last].thickness = b.bfl_mm;
+    let seq_f = Sequence::forward(&sys_focus, LAMBDA);
+    let r = seq_f.trace(&Ray::collimated(0.0, 0.0, 1e-4));
+    assert_eq!(r.fate, Fate::Sensor);
+    assert!(
+        r.ray.origin.y.abs() < 1e-9,
+        "paraxial ray misses focus: {}",
+        r.ray.origin.y
+    );
+    assert!(seq.len() == 6);
+}
+
+#[test]
+fn snell_law_at_a_flat_interface() {
+    // Air → n = 1.5 at 30°: sin θt = sin 30° / 1.5.
+    let sys = LensSystem::new(
+        "flat",
+        vec![
+            Surface::stop(1.0, 50.0),
+            Surface::spherical(0.0, 10.0, glass(1.5), 50.0),
+            Surface::sensor(50.0),
+        ],
+    );
+    let seq = Sequence::forward(&sys, LAMBDA);
+    for deg in [0.0f64, 10.0, 30.0, 60.0, 85.0] {
+        let r = seq.trace(&Ray::collimated(deg.to_radians(), 0.0, 0.0));
+        let want = deg.to_radians().sin() / 1.5;
+        assert!(
+            (r.ray.dir.y - want).abs() < 1e-15,
+            "{deg}°: {} vs {want}",
+            r.ray.dir.y
+        );
+        assert!((r.ray.dir.length() - 1.0).abs() < 1e-15);
+    }
+}
+
+#[test]
+fn snell_law_at_a_curved_interface_is_exact() {
+    // Refraction at a sphere: check n1 sin θ1 = n2 sin θ2 about the local normal, and that
+    // incident ray, normal and refracted ray are coplanar.
+    let sys = thick_lens(30.0, -30.0, 6.0, 1.7, 40.0);
+    let seq = Sequence::forward(&sys, LAMBDA);
+    let ray = Ray::collimated(0.2, 0.7, 3.0);
+    let mut hits = Vec::new();
+    seq.trace_with_hits(&ray, &mut hits);
+    let h = hits[1];
+    let c = 1.0 / 30.0;
+    let normal = DVec3::new(
+        -c * h.position.x,
+        -c * h.position.y,
+        1.0 - c * (h.position.z - 0.0),
+    )
+    .normalize();
+    let d_in = hits[0].direction;
+    let d_out = h.direction;
+    let sin_in = d_in.cross(normal).length();
+    let sin_out = d_out.cross(normal).length();
+    assert!((1.0 * sin_in - 1.7 * sin_out).abs() < 1e-14);
+    assert!(
+        d_in.cross(normal)
+            .normalize()
+            .dot(d_out.cross(normal).normalize())
+            > 1.0 - 1e-12
+    );
+}
+
+#[test]
+fn total_internal_reflection_is_detected() {
+    // Glass → air through a flat back face beyond the critical angle.
+    let sys = LensSystem::new(
+        "prism-ish",
+        vec![
+            Surface::stop(0.0, 50.0),
+            Surface::spherical(0.0, 10.0, glass(1.5), 50.0),
+            Surface::spherical(0.0, 10.0, Medium::Air, 50.0),
+            Surface::sensor(50.0),
+        ],
+    );
+    // Inside the glass the ray makes asin(sin θ / 1.5) < critical always for air incidence,
+    // so start the ray inside the glass with a custom sequence instead.
+    let seq = Sequence::custom(
+        &sys,
+        LAMBDA,
+        true,
+        &[(2, Interaction::Refract), (3, Interaction::Sensor)],
+    )
+    .unwrap();
+    let crit = (1.0f64 / 1.5).asin();
+    let below = Ray::new(
+        DVec3::new(0.0, 0.0, 5.0),
+        DVec3::new(0.0, (crit - 0.01).sin(), (crit - 0.01).cos()),
+    );
+    let above = Ray::new(
+        DVec3::new(0.0, 0.0, 5.0),
+        DVec3::new(0.0, (crit + 0.01).sin(), (crit + 0.01).cos()),
+    );
+    assert_eq!(seq.trace(&below).fate, Fate::Sensor);
+    let r = seq.trace(&above);
+    assert_eq!(r.fate, Fate::TotalInternalReflection { surface: 2 });
+    assert!(!r.completed);
+}
+
+#[test]
+fn vignetted_rays_still_report_their_landing_point() {
+    let sys = thick_lens(50.0, -50.0, 5.0, 1.5, 45.0);
+    let seq = Sequence::forward(&sys, LAMBDA);
+    let r = seq.trace(&Ray::collimated(0.0, 0.0, 7.0)); // stop radius 5
+    assert_eq!(r.fate, Fate::Vignetted { surface: 0 });
+    assert!(r.completed);
+    assert!((r.max_relative_radius - 7.0 / 5.0).abs() < 1e-12);
+}
+
+#[test]
+fn a_ray_that_misses_a_sphere_is_reported() {
+    let sys = thick_lens(5.0, -5.0, 2.0, 1.5, 10.0);
+    let seq = Sequence::forward(&sys, LAMBDA);
+    let r = seq.trace(&Ray::collimated(0.0, 0.0, 6.0));
+    assert_eq!(r.fate, Fate::Vignetted { surface: 0 });
+    let r = Sequence::custom(&sys, LAMBDA, true, &[(1, Interaction::Refract)])
+        .unwrap()
+        .trace(&Ray::collimated(0.0, 0.0, 6.0));
+    assert_eq!(r.fate, Fate::Missed { surface: 1 });
+}
+
+#[test]
+fn reflection_off_a_concave_mirror_focuses_at_half_the_radius() {
+    // A concave surface (R = −200 facing the light, centre toward the object) reflects a
+    // paraxial collimated ray through its focus at R/2 in front of it.
+    let sys = LensSystem::new(
+        "mirror",
+        vec![
+            Surface::stop(0.0, 30.0),
+            Surface::spherical(-200.0, 0.0, glass(1.5), 30.0),
+            Surface::sensor(30.0),
+        ],
+    );
+    let seq = Sequence::custom(&sys, LAMBDA, true, &[(1, Interaction::Reflect)]).unwrap();
+    let r = seq.trace(&Ray::collimated(0.0, 0.0, 1e-3));
+    assert!(r.ray.dir.z < 0.0, "travels back");
+    // Where it crosses the axis: z = z_hit − y / (dy/dz).
+    let t = -r.ray.origin.y / r.ray.dir.y;
+    let z_cross = r.ray.origin.z + t * r.ray.dir.z;
+    assert!((z_cross + 100.0).abs() < 1e-4, "focus at {z_cross}");
+}
+
+#[test]
+fn batched_f64_matches_scalar_exactly_and_f32_closely() {
+    let sys = thick_lens(40.0, -120.0, 6.0, 1.62, 55.0);
+    let seq = Sequence::forward(&sys, LAMBDA);
+    let seq32 = seq.cast::<f32>();
+    let mut b64 = RayBatch::<f64>::with_capacity(300);
+    let mut b32 = RayBatch::<f32>::with_capacity(300);
+    let mut rays = Vec::new();
+    for i in 0..300 {
+        let h = -8.0 + 16.0 * i as f64 / 299.0;
+        let r = Ray::collimated(0.1, 0.3, h);
+        b64.push(r.origin.to_array(), r.dir.to_array());
+        b32.push(r.origin.as_vec3().to_array(), r.dir.as_vec3().to_array());
+        rays.push(r);
+    }
+    seq.trace_batch(&mut b64);
+    seq32.trace_batch(&mut b32);
+    for (i, ray) in rays.iter().enumerate() {
+        let s = seq.trace(ray);
+        let (p, d, fate, rel) = b64.get(i);
+        assert_eq!(fate, s.fate, "ray {i}");
+        assert_eq!(b64.completed(i), s.completed);
+        assert_eq!(p, s.ray.origin.to_array(), "ray {i}");
+        assert_eq!(d, s.ray.dir.to_array());
+        assert_eq!(rel, s.max_relative_radius);
+        let (p32, _, f32fate, _) = b32.get(i);
+        if s.max_relative_radius < 0.999 || s.max_relative_radius > 1.001 {
+            assert_eq!(f32fate, s.fate, "ray {i}");
+        }
+        assert!(
+            (p32[1] as f64 - p[1]).abs() < 2e-4,
+            "ray {i}: {} vs {}",
+            p32[1],
+            p[1]
+        );
+    }
+}
