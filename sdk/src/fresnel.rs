@@ -60,7 +60,7 @@ mod tests {
 
     #[test]
     fn brewster_angle_has_no_p_reflection() {
-        let (n1, n2) = (1.0, 1.5168);
+        let (n1, n2): (f64, f64) = (1.0, 1.5168);
         let theta_b = (n2 / n1).atan();
         let r = reflectance(n1, n2, theta_b.cos());
         assert!(r.p < 1e-28, "Rp at Brewster = {}", r.p);
@@ -69,7 +69,7 @@ mod tests {
 
     #[test]
     fn total_internal_reflection_beyond_critical_angle() {
-        let (n1, n2) = (1.5, 1.0);
+        let (n1, n2): (f64, f64) = (1.5, 1.0);
         let crit = (n2 / n1).asin();
         assert_eq!(unpolarised(n1, n2, (crit + 1e-6).cos()), 1.0);
         assert!(unpolarised(n1, n2, (crit - 1e-3).cos()) < 1.0);
