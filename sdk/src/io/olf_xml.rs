@@ -1,0 +1,95 @@
+//! OpenLensFlare XML and our superset of it (`docs/formats.md`).
+//!
+//! OpenLensFlare files are read exactly as OpenLensFlare means them: `height` is the clear
+//! semi-diameter, `radius` 0 is flat, `refractiveIndex`/`abbeNumber` describe the medium after
+//! the surface (n = 1 is air), `coatingLambda`/`coatingIor` of 0 mean no coating. Our files add
+//! optional tags (`curvature`, `conic`, `aspheric`, `glass`, `coatingStack`, `notes`,
+//! `source`); see [`write_xml`].
+
+mod read;
+mod spans;
+mod write;
+
+#[cfg(test)]
+mod tests;
+
+pub use write::{write_olf_xml, write_xml};
+
+use super::{LensFileError, LoadedLens};
+use crate::io::text::LineIndex;
+
+/// Tag names of the format.
+mod tags {
+    pub const SYSTEM: &str = "opticalSystem";
+    pub const ELEMENT: &str = "element";
+    pub const LAYER: &str = "layer";
+    pub const SYSTEM_TAGS: &[&str] = &[
+        "name",
+        "fnumber",
+        "effectiveFocalLength",
+        "fieldOfView",
+        "filmWidth",
+        "filmHeight",
+        "elements",
+        "notes",
+        "source",
+    ];
+    pub const ELEMENT_TAGS: &[&str] = &[
+        "type",
+        "height",
+        "thickness",
+        "radius",
+        "curvature",
+        "conic",
+        "aspheric",
+        "refractiveIndex",
+        "abbeNumber",
+        "glass",
+        "coatingLambda",
+        "coatingIor",
+        "coatingStack",
+        "mask",
+        "maskFT",
+    ];
+    pub const LAYER_TAGS: &[&str] = &["index", "thicknessNm"];
+}
+
+/// Parses OpenLensFlare XML (or ours) and validates the system. `file_label` names the file
+/// in errors and warnings. Every [`ValidationIssue`](crate::system::ValidationIssue) is
+/// reported at the line and column of the tag it concerns; when there are several, the error
+/// describes the first and lists the others in its message.
+pub fn parse_olf_xml(text: &str, file_label: &str) -> Result<LoadedLens, LensFileError> {
+    let parsed = read::parse_document(text, file_label)?;
+    if let Err(issues) = parsed.system.validate() {
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+        let lines = LineIndex::new(text);
+        let mut located = issues.iter().map(|issue| {
+            let (pos, field) = parsed.spans.locate(issue);
+            let (line, column) = lines.line_col(pos);
+            LensFileError::at(file_label, line, column, field, issue.message.clone())
+        });
+        if let Some(mut first) = located.next() {
+            let rest: Vec<String> = located
+                .map(|e| {
+                    format!(
+                        "{}:{}: field `{}`: {}",
+                        e.line, e.column, e.field, e.message
+                    )
+                })
+                .collect();
+            if !rest.is_empty() {
+                first.message = format!(
+                    "{} (and {} more: {})",
+                    first.message,
+                    rest.len(),
+                    rest.join("; ")
+                );
+            }
+            return Err(first);
+        }
+    }
+    Ok(LoadedLens {
+        system: parsed.system,
+        warnings: parsed.warnings,
+    })
+}

@@ -1,0 +1,100 @@
+//! Turning a lens file's bytes into text, and byte offsets into 1-based line and column.
+
+use std::borrow::Cow;
+
+/// A file's bytes could not be decoded; `offset` is the byte offset of the first bad byte.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub(crate) struct DecodeError {
+    pub offset: usize,
+    pub message: String,
+}
+
+/// Decodes UTF-8 (with or without a byte-order mark) or UTF-16 with a byte-order mark.
+pub(crate) fn decode(bytes: &[u8]) -> Result<Cow<'_, str>, DecodeError> {
+    if let Some(rest) = bytes.strip_prefix(b"\xEF\xBB\xBF") {
+        return utf8(rest).map(Cow::Borrowed);
+    }
+    if let Some(rest) = bytes.strip_prefix(b"\xFF\xFE") {
+        return utf16(rest, u16::from_le_bytes).map(Cow::Owned);
+    }
+    if let Some(rest) = bytes.strip_prefix(b"\xFE\xFF") {
+        return utf16(rest, u16::from_be_bytes).map(Cow::Owned);
+    }
+    utf8(bytes).map(Cow::Borrowed)
+}
+
+fn utf8(bytes: &[u8]) -> Result<&str, DecodeError> {
+    std::str::from_utf8(bytes).map_err(|e| DecodeError {
+        offset: e.valid_up_to(),
+        message: "the file is not valid UTF-8 (save it as UTF-8)".into(),
+    })
+}
+
+fn utf16(bytes: &[u8], unit: fn([u8; 2]) -> u16) -> Result<String, DecodeError> {
+    if !bytes.len().is_multiple_of(2) {
+        return Err(DecodeError {
+            offset: bytes.len(),
+            message: "the UTF-16 file has an odd number of bytes".into(),
+        });
+    }
+    let units: Vec<u16> = bytes.chunks_exact(2).map(|c| unit([c[0], c[1]])).collect();
+    String::from_utf16(&units).map_err(|_| DecodeError {
+        offset: 0,
+        message: "the file is not valid UTF-16".into(),
+    })
+}
+
+/// Maps byte offsets of a text to 1-based (line, column); columns count characters.
+#[derive(Debug)]
+pub(crate) struct LineIndex<'a> {
+    text: &'a str,
+    starts: Vec<usize>,
+}
+
+impl<'a> LineIndex<'a> {
+    pub fn new(text: &'a str) -> Self {
+        let starts = std::iter::once(0)
+            .chain(text.match_indices('\n').map(|(i, _)| i + 1))
+            .collect();
+        LineIndex { text, starts }
+    }
+
+    /// Line and column of byte `offset` (clamped to the text).
+    pub fn line_col(&self, offset: usize) -> (usize, usize) {
+        let offset = offset.min(self.text.len());
+        let line = self.starts.partition_point(|&s| s <= offset).max(1);
+        let start = self.starts[line - 1];
+        let column = match self.text.get(start..offset) {
+            Some(prefix) => prefix.chars().count(),
+            None => offset - start,
+        };
+        (line, column + 1)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn line_and_column_are_one_based() {
+        let idx = LineIndex::new("ab\ncdé\n\nx");
+        assert_eq!(idx.line_col(0), (1, 1));
+        assert_eq!(idx.line_col(1), (1, 2));
+        assert_eq!(idx.line_col(3), (2, 1));
+        // 'é' is two bytes but one column.
+        assert_eq!(idx.line_col(7), (2, 4));
+        assert_eq!(idx.line_col(8), (3, 1));
+        assert_eq!(idx.line_col(9), (4, 1));
+        assert_eq!(idx.line_col(1000), (4, 2));
+    }
+
+    #[test]
+    fn decodes_boms_and_reports_bad_utf8() {
+        assert_eq!(decode(b"\xEF\xBB\xBF<a/>").unwrap(), "<a/>");
+        assert_eq!(decode(b"\xFF\xFE<\0a\0").unwrap(), "<a");
+        assert_eq!(decode(b"\xFE\xFF\0<\0a").unwrap(), "<a");
+        let e = decode(b"<a>\xE9</a>").unwrap_err();
+        assert_eq!(e.offset, 3);
+    }
+}
