@@ -192,6 +192,21 @@ fn our_extensions_round_trip() {
     assert_eq!(back.system, s);
 }
 
+#[test]
+fn radius_is_the_shortest_decimal_whose_reciprocal_is_the_curvature() {
+    let mut s = small_system();
+    s.surfaces[0].curvature = 1.0 / 25.462532;
+    s.surfaces[1].curvature = 1e-320;
+    let text = write_xml(&s);
+    assert!(text.contains("<radius>25.462532</radius>"), "{text}");
+    // A radius too large to be finite is flat to OpenLensFlare; the curvature stays exact.
+    assert!(
+        text.contains("<radius>0</radius>\n            <curvature>0.00000"),
+        "{text}"
+    );
+    assert_eq!(parse_document(&text, "r.xml").unwrap().system, s);
+}
+
 /// A valid four-surface system; the line numbers of [`SMALL`] are used by the error tests.
 fn small_system() -> LensSystem {
     parse_olf_xml(SMALL, "test.xml").unwrap().system

@@ -40,6 +40,24 @@ fn num(v: f64) -> String {
     format!("{v}")
 }
 
+/// OpenLensFlare's `radius` for curvature `c`: the shortest decimal whose reciprocal is exactly
+/// `c` (so a radius typed as 25.462532 is written so, not as 25.462531999999996); 0 when flat
+/// or when the radius would not be finite.
+fn radius_text(c: f64) -> String {
+    let r = 1.0 / c;
+    if !r.is_finite() {
+        return "0".into();
+    }
+    for digits in 0..17 {
+        if let Ok(v) = format!("{r:.digits$e}").parse::<f64>()
+            && 1.0 / v == c
+        {
+            return num(v);
+        }
+    }
+    num(r)
+}
+
 fn escape(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")
@@ -143,12 +161,7 @@ fn write_element(out: &mut String, s: &Surface, flavor: Flavor) {
     tag("type", type_name(s));
     tag("height", &num(s.semi_diameter));
     tag("thickness", &num(s.thickness));
-    // OpenLensFlare's radius; a curvature too small for a finite radius is flat to it.
-    let radius = 1.0 / s.curvature;
-    tag(
-        "radius",
-        &num(if radius.is_finite() { radius } else { 0.0 }),
-    );
+    tag("radius", &radius_text(s.curvature));
     if ours {
         tag("curvature", &num(s.curvature));
         if s.conic != 0.0 {
