@@ -6,6 +6,9 @@
 //! optional tags (`curvature`, `conic`, `aspheric`, `glass`, `coatingStack`, `notes`,
 //! `source`); see [`write_xml`].
 
+mod coating;
+mod fields;
+mod medium;
 mod read;
 mod spans;
 mod write;

@@ -1,13 +1,14 @@
 //! Reading OpenLensFlare XML and our superset of it into a [`LensSystem`].
 
+use super::coating::read_coating;
+use super::fields::{Ctx, Fields, number, text};
+use super::medium::read_medium;
 use super::spans::{ElementSpans, SystemSpans};
 use super::tags;
-use crate::coating::{Coating, CoatingLayer};
-use crate::glass::GlassCatalog;
 use crate::io::LensFileError;
 use crate::io::text::LineIndex;
 use crate::io::xml_tree::{self, Node};
-use crate::system::{LensSystem, Medium, Surface, SurfaceKind, curvature_from_radius};
+use crate::system::{LensSystem, Surface, SurfaceKind, curvature_from_radius};
 
 /// Film size used when a file gives none (full-frame 35 mm).
 const DEFAULT_FILM_MM: (f64, f64) = (36.0, 24.0);
@@ -18,29 +19,6 @@ pub(super) struct Parsed {
     pub system: LensSystem,
     pub spans: SystemSpans,
     pub warnings: Vec<String>,
-}
-
-/// The file being read: its name, its line index and the warnings so far.
-struct Ctx<'a> {
-    file: &'a str,
-    lines: LineIndex<'a>,
-    warnings: Vec<String>,
-}
-
-impl Ctx<'_> {
-    fn error(&self, pos: usize, field: &str, message: impl Into<String>) -> LensFileError {
-        let (line, column) = self.lines.line_col(pos);
-        LensFileError::at(self.file, line, column, field, message)
-    }
-
-    fn warn(&mut self, pos: usize, message: impl AsRef<str>) {
-        let (line, column) = self.lines.line_col(pos);
-        self.warnings.push(format!(
-            "{}:{line}:{column}: {}",
-            self.file,
-            message.as_ref()
-        ));
-    }
 }
 
 /// Parses the document without validating the resulting system.
@@ -61,83 +39,6 @@ pub(super) fn parse_document(text: &str, file: &str) -> Result<Parsed, LensFileE
         spans,
         warnings: ctx.warnings,
     })
-}
-
-/// The known children of one element, first occurrence of each; warns about the rest.
-struct Fields<'n> {
-    found: Vec<(&'static str, &'n Node)>,
-}
-
-impl<'n> Fields<'n> {
-    fn collect(ctx: &mut Ctx<'_>, parent: &'n Node, known: &[&'static str]) -> Self {
-        let mut found: Vec<(&'static str, &'n Node)> = Vec::new();
-        for child in &parent.children {
-            match known.iter().find(|k| **k == child.name) {
-                Some(&k) if found.iter().any(|(n, _)| *n == k) => ctx.warn(
-                    child.pos,
-                    format!(
-                        "<{k}> appears again in <{}>; the first one is used",
-                        parent.name
-                    ),
-                ),
-                Some(&k) => found.push((k, child)),
-                None => ctx.warn(
-                    child.pos,
-                    format!("unknown tag <{}> in <{}> ignored", child.name, parent.name),
-                ),
-            }
-        }
-        if let Some(p) = parent.text_pos {
-            ctx.warn(p, format!("text directly inside <{}> ignored", parent.name));
-        }
-        Fields { found }
-    }
-
-    fn get(&self, tag: &str) -> Option<&'n Node> {
-        self.found
-            .iter()
-            .find(|(n, _)| *n == tag)
-            .map(|(_, node)| *node)
-    }
-
-    fn positions(&self) -> Vec<(&'static str, usize)> {
-        self.found
-            .iter()
-            .map(|(n, node)| (*n, node.value_pos()))
-            .collect()
-    }
-}
-
-/// A finite number, or `None` when the tag is absent or empty.
-fn number(ctx: &mut Ctx<'_>, node: Option<&Node>) -> Result<Option<f64>, LensFileError> {
-    let Some(node) = node else { return Ok(None) };
-    let t = node.value();
-    if t.is_empty() {
-        ctx.warn(
-            node.pos,
-            format!("<{}> is empty; treated as absent", node.name),
-        );
-        return Ok(None);
-    }
-    match t.parse::<f64>() {
-        Ok(v) if v.is_finite() => Ok(Some(v)),
-        Ok(_) => Err(ctx.error(
-            node.value_pos(),
-            &node.name,
-            format!("must be finite, got {t}"),
-        )),
-        Err(_) => Err(ctx.error(
-            node.value_pos(),
-            &node.name,
-            format!("expected a number, got `{t}`"),
-        )),
-    }
-}
-
-/// Trimmed text, `None` when absent or empty.
-fn text(node: Option<&Node>) -> Option<String> {
-    node.map(|n| n.value().to_string())
-        .filter(|s| !s.is_empty())
 }
 
 fn read_system(
@@ -396,147 +297,4 @@ fn read_aspheric(ctx: &mut Ctx<'_>, node: Option<&Node>) -> Result<[f64; 8], Len
         };
     }
     Ok(coeffs)
-}
-
-/// The Abbe number: a finite value, or `inf` for a non-dispersive medium.
-enum Abbe {
-    Finite(f64),
-    NonDispersive,
-}
-
-fn read_abbe(ctx: &mut Ctx<'_>, node: Option<&Node>) -> Result<Option<Abbe>, LensFileError> {
-    if let Some(n) = node
-        && let Ok(v) = n.value().parse::<f64>()
-        && v == f64::INFINITY
-    {
-        return Ok(Some(Abbe::NonDispersive));
-    }
-    Ok(number(ctx, node)?.map(Abbe::Finite))
-}
-
-/// The medium after the surface: a catalogue `<glass>`, else `refractiveIndex`/`abbeNumber`.
-fn read_medium(
-    ctx: &mut Ctx<'_>,
-    f: &Fields<'_>,
-    node: &Node,
-    lens: bool,
-) -> Result<Medium, LensFileError> {
-    let nd = number(ctx, f.get("refractiveIndex"))?;
-    let abbe = read_abbe(ctx, f.get("abbeNumber"))?;
-    if let Some(g) = f.get("glass") {
-        let name = g.value();
-        if name.is_empty() {
-            ctx.warn(g.pos, "<glass> is empty; treated as absent");
-        } else {
-            let entry = GlassCatalog::bundled()
-                .find(name)
-                .map_err(|e| ctx.error(g.value_pos(), "glass", e.to_string()))?;
-            if let Some(n) = nd
-                && (n - entry.nd).abs() > 5e-5
-            {
-                ctx.warn(
-                    g.value_pos(),
-                    format!(
-                        "refractiveIndex {n} differs from {}'s nd {}; the glass is used",
-                        entry.canonical_name(),
-                        entry.nd
-                    ),
-                );
-            }
-            if let Some(Abbe::Finite(v)) = abbe
-                && (v - entry.vd).abs() > 0.05
-            {
-                ctx.warn(
-                    g.value_pos(),
-                    format!(
-                        "abbeNumber {v} differs from {}'s Vd {}; the glass is used",
-                        entry.canonical_name(),
-                        entry.vd
-                    ),
-                );
-            }
-            return Ok(Medium::Glass {
-                name: entry.canonical_name(),
-                dispersion: entry.dispersion.clone(),
-            });
-        }
-    }
-    Ok(match nd {
-        None => {
-            if lens {
-                ctx.warn(
-                    node.pos,
-                    "no <refractiveIndex>; the medium after this surface is taken as air",
-                );
-            }
-            Medium::Air
-        }
-        Some(1.0) => Medium::Air,
-        Some(n) => {
-            let vd = match abbe {
-                Some(Abbe::Finite(v)) => Some(v),
-                Some(Abbe::NonDispersive) => None,
-                None => {
-                    ctx.warn(
-                        node.pos,
-                        format!(
-                            "glass n = {n} without <abbeNumber> is taken as non-dispersive \
-                             (write <abbeNumber>inf</abbeNumber> to say so)"
-                        ),
-                    );
-                    None
-                }
-            };
-            Medium::Model { nd: n, vd }
-        }
-    })
-}
-
-/// `<coatingStack>` takes precedence; else `coatingLambda` + `coatingIor` (0 or absent: none).
-fn read_coating(ctx: &mut Ctx<'_>, f: &Fields<'_>) -> Result<Coating, LensFileError> {
-    if let Some(stack) = f.get("coatingStack") {
-        let mut layers = Vec::new();
-        for child in &stack.children {
-            if child.name != tags::LAYER {
-                ctx.warn(
-                    child.pos,
-                    format!("unknown tag <{}> in <coatingStack> ignored", child.name),
-                );
-                continue;
-            }
-            let lf = Fields::collect(ctx, child, tags::LAYER_TAGS);
-            let mut value = |tag: &str| -> Result<f64, LensFileError> {
-                number(ctx, lf.get(tag))?.ok_or_else(|| {
-                    ctx.error(child.pos, tag, format!("a coating layer needs <{tag}>"))
-                })
-            };
-            let index = value("index")?;
-            let thickness_nm = value("thicknessNm")?;
-            layers.push(CoatingLayer {
-                index,
-                thickness_nm,
-            });
-        }
-        return Ok(Coating::Stack(layers));
-    }
-    let lambda = number(ctx, f.get("coatingLambda"))?.unwrap_or(0.0);
-    let ior = number(ctx, f.get("coatingIor"))?.unwrap_or(0.0);
-    Ok(if lambda != 0.0 && ior != 0.0 {
-        Coating::SingleLayer {
-            design_wavelength_nm: lambda,
-            index: ior,
-        }
-    } else {
-        if lambda != 0.0 || ior != 0.0 {
-            let at = f
-                .get("coatingIor")
-                .or(f.get("coatingLambda"))
-                .map_or(0, Node::value_pos);
-            ctx.warn(
-                at,
-                "a coating needs both coatingLambda and coatingIor; the surface is uncoated",
-            );
-        }
-        Coating::None
-    })
 }
