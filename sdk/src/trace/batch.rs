@@ -5,9 +5,9 @@
 use rayon::prelude::*;
 
 use super::fate::Fate;
-use super::lane::{self, REFLECT, REFRACT, SENSOR, advance};
+use super::lane::{advance, dispatch_step};
 use super::real::Real;
-use super::sequence::{Interaction, Sequence, Step};
+use super::sequence::{Sequence, Step};
 
 /// Rays per packet.
 pub const LANES: usize = 64;
@@ -133,64 +133,64 @@ impl<T: Real> Sequence<T> {
 
     /// Traces one packet through every step.
     pub fn trace_packet(&self, p: &mut Packet<T>) {
-        for s in &self.steps {
-            match (s.interaction, s.aspheric) {
-                (Interaction::Refract, false) => step_packet::<T, REFRACT, false>(s, p),
-                (Interaction::Refract, true) => step_packet::<T, REFRACT, true>(s, p),
-                (Interaction::Reflect, false) => step_packet::<T, REFLECT, false>(s, p),
-                (Interaction::Reflect, true) => step_packet::<T, REFLECT, true>(s, p),
-                (Interaction::Sensor, false) => step_packet::<T, SENSOR, false>(s, p),
-                (Interaction::Sensor, true) => step_packet::<T, SENSOR, true>(s, p),
-            }
-        }
+        trace_packet_dispatch(&self.steps, p);
+    }
+}
+
+/// The packet kernel, compiled for the baseline CPU and for AVX2 + FMA, chosen at run time.
+/// (Products and sums are not contracted into FMAs, so every version gives the same bits.)
+#[multiversion::multiversion(targets("x86_64+avx2+fma"))]
+fn trace_packet_dispatch<T: Real>(steps: &[Step<T>], p: &mut Packet<T>) {
+    for s in steps {
+        dispatch_step!(s, step_packet, s, p);
     }
 }
 
 #[inline(always)]
-fn step_packet<T: Real, const MODE: u8, const ASPH: bool>(s: &Step<T>, p: &mut Packet<T>) {
+fn step_packet<T: Real, const MODE: u8, const SHAPE: u8>(s: &Step<T>, p: &mut Packet<T>) {
     let surface = s.surface;
     let vignetted = Fate::Vignetted { surface }.encode();
     let missed = Fate::Missed { surface }.encode();
     let tir = Fate::TotalInternalReflection { surface }.encode();
     let no_convergence = Fate::NoConvergence { surface }.encode();
+    // Old values are read up front and every write is a select: this shape lets LLVM turn the
+    // loop into SIMD code (conditional read-modify-writes keep it scalar).
     for i in 0..LANES {
-        let mut pos = [p.x[i], p.y[i], p.z[i]];
-        let mut dir = [p.dx[i], p.dy[i], p.dz[i]];
-        let out = advance::<T, MODE, ASPH>(s, &mut pos, &mut dir);
-        let fate = p.fate[i];
-        let alive = fate & TERMINATED == 0;
-        let ok = out.status == lane::OK;
-        let upd = alive && ok;
+        let (x0, y0, z0) = (p.x[i], p.y[i], p.z[i]);
+        let (dx0, dy0, dz0) = (p.dx[i], p.dy[i], p.dz[i]);
+        let (m0, f0) = (p.max_rel2[i], p.fate[i]);
+        let mut pos = [x0, y0, z0];
+        let mut dir = [dx0, dy0, dz0];
+        let out = advance::<T, MODE, SHAPE>(s, &mut pos, &mut dir);
+        let alive = f0 & TERMINATED == 0;
+        let fail = out.missed | out.tir | out.no_convergence;
+        let upd = alive & !fail;
         let rel2 = out.r2 * s.inv_semi2;
-        p.x[i] = if upd { pos[0] } else { p.x[i] };
-        p.y[i] = if upd { pos[1] } else { p.y[i] };
-        p.z[i] = if upd { pos[2] } else { p.z[i] };
-        p.dx[i] = if upd { dir[0] } else { p.dx[i] };
-        p.dy[i] = if upd { dir[1] } else { p.dy[i] };
-        p.dz[i] = if upd { dir[2] } else { p.dz[i] };
-        p.max_rel2[i] = if upd && rel2 > p.max_rel2[i] {
-            rel2
+        p.x[i] = if upd { pos[0] } else { x0 };
+        p.y[i] = if upd { pos[1] } else { y0 };
+        p.z[i] = if upd { pos[2] } else { z0 };
+        p.dx[i] = if upd { dir[0] } else { dx0 };
+        p.dy[i] = if upd { dir[1] } else { dy0 };
+        p.dz[i] = if upd { dir[2] } else { dz0 };
+        p.max_rel2[i] = if upd { rel2.max(m0) } else { m0 };
+        let fail_code = if out.missed {
+            missed
+        } else if out.no_convergence {
+            no_convergence
         } else {
-            p.max_rel2[i]
+            tir
         };
-        let fail_code = match out.status {
-            lane::TIR => tir,
-            lane::NO_CONVERGENCE => no_convergence,
-            _ => missed,
-        };
-        let first = if fate & !TERMINATED == 0 {
-            if !ok {
-                fail_code
-            } else if rel2 > T::one() {
-                vignetted
-            } else {
-                0
-            }
+        let event = if fail {
+            fail_code
+        } else if rel2 > T::one() {
+            vignetted
         } else {
-            fate & !TERMINATED
+            0
         };
-        let term = if ok { 0 } else { TERMINATED };
-        p.fate[i] = if alive { first | term } else { fate };
+        let earlier = f0 & !TERMINATED;
+        let first = if earlier == 0 { event } else { earlier };
+        let term = if fail { TERMINATED } else { 0 };
+        p.fate[i] = if alive { first | term } else { f0 };
     }
 }
 

@@ -4,13 +4,7 @@
 //! compiles to straight-line SIMD code for spherical and conic surfaces.
 
 use super::real::Real;
-use super::sequence::{Interaction, Step};
-
-/// Outcome codes of one step.
-pub(crate) const OK: u8 = 0;
-pub(crate) const MISSED: u8 = 1;
-pub(crate) const TIR: u8 = 2;
-pub(crate) const NO_CONVERGENCE: u8 = 3;
+use super::sequence::Step;
 
 /// Maximum Newton iterations for an even asphere.
 const NEWTON_MAX_ITER: usize = 32;
@@ -18,7 +12,12 @@ const NEWTON_MAX_ITER: usize = 32;
 /// What one step did to one ray.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct StepOut<T> {
-    pub status: u8,
+    /// The ray's line does not meet the surface.
+    pub missed: bool,
+    /// Total internal reflection.
+    pub tir: bool,
+    /// The asphere iteration failed.
+    pub no_convergence: bool,
     /// Squared radial distance of the hit from the axis.
     pub r2: T,
     /// |cos| of the angle of incidence (for Fresnel).
@@ -30,25 +29,53 @@ pub(crate) const REFRACT: u8 = 0;
 pub(crate) const REFLECT: u8 = 1;
 pub(crate) const SENSOR: u8 = 2;
 
-/// [`advance`] with the interaction and the asphere flag chosen at run time (scalar use).
+/// Surface shape codes for the const-generic kernel.
+pub(crate) const SPHERE: u8 = 0;
+pub(crate) const CONIC: u8 = 1;
+pub(crate) const ASPHERE: u8 = 2;
+
+/// The shape code of a step.
 #[inline]
-pub(crate) fn advance_dyn<T: Real>(s: &Step<T>, p: &mut [T; 3], d: &mut [T; 3]) -> StepOut<T> {
-    match (s.interaction, s.aspheric) {
-        (Interaction::Refract, false) => advance::<T, REFRACT, false>(s, p, d),
-        (Interaction::Refract, true) => advance::<T, REFRACT, true>(s, p, d),
-        (Interaction::Reflect, false) => advance::<T, REFLECT, false>(s, p, d),
-        (Interaction::Reflect, true) => advance::<T, REFLECT, true>(s, p, d),
-        (Interaction::Sensor, false) => advance::<T, SENSOR, false>(s, p, d),
-        (Interaction::Sensor, true) => advance::<T, SENSOR, true>(s, p, d),
+pub(crate) fn shape<T: Real>(s: &Step<T>) -> u8 {
+    if s.aspheric {
+        ASPHERE
+    } else if s.k != T::zero() {
+        CONIC
+    } else {
+        SPHERE
     }
 }
 
+/// Calls `$f::<T, MODE, SHAPE>($args)` with the step's interaction and shape as constants.
+macro_rules! dispatch_step {
+    ($s:expr, $f:ident, $($arg:expr),*) => {{
+        use $crate::trace::lane::{ASPHERE, CONIC, REFLECT, REFRACT, SENSOR, SPHERE};
+        use $crate::trace::sequence::Interaction;
+        match ($s.interaction, $crate::trace::lane::shape($s)) {
+            (Interaction::Refract, SPHERE) => $f::<T, REFRACT, SPHERE>($($arg),*),
+            (Interaction::Refract, CONIC) => $f::<T, REFRACT, CONIC>($($arg),*),
+            (Interaction::Refract, _) => $f::<T, REFRACT, ASPHERE>($($arg),*),
+            (Interaction::Reflect, SPHERE) => $f::<T, REFLECT, SPHERE>($($arg),*),
+            (Interaction::Reflect, CONIC) => $f::<T, REFLECT, CONIC>($($arg),*),
+            (Interaction::Reflect, _) => $f::<T, REFLECT, ASPHERE>($($arg),*),
+            (Interaction::Sensor, _) => $f::<T, SENSOR, SPHERE>($($arg),*),
+        }
+    }};
+}
+pub(crate) use dispatch_step;
+
+/// [`advance`] with the interaction and the shape chosen at run time (scalar use).
+#[inline]
+pub(crate) fn advance_dyn<T: Real>(s: &Step<T>, p: &mut [T; 3], d: &mut [T; 3]) -> StepOut<T> {
+    dispatch_step!(s, advance, s, p, d)
+}
+
 /// Intersects the ray `(p, d)` (`d` a unit vector) with the surface of `s` and applies the
-/// interaction `MODE` (`REFRACT`, `REFLECT`, `SENSOR`); `ASPH` enables the even-asphere
-/// refinement. `p` and `d` are updated in place; on failure they hold unspecified values and
+/// interaction `MODE` (`REFRACT`, `REFLECT`, `SENSOR`) for a surface of shape `SHAPE`
+/// (`SPHERE`, `CONIC`, `ASPHERE`; the sensor plane is a sphere of curvature 0). `p` and `d` are updated in place; on failure they hold unspecified values and
 /// `status` says why.
 #[inline(always)]
-pub(crate) fn advance<T: Real, const MODE: u8, const ASPH: bool>(
+pub(crate) fn advance<T: Real, const MODE: u8, const SHAPE: u8>(
     s: &Step<T>,
     p: &mut [T; 3],
     d: &mut [T; 3],
@@ -73,43 +100,39 @@ pub(crate) fn advance<T: Real, const MODE: u8, const ASPH: bool>(
     let mut hx = x + t1 * dx;
     let mut hy = y + t1 * dy;
     let mut hz = t1 * dz;
-    let mut status = if disc >= zero && t1.is_finite() && t0.is_finite() {
-        OK
-    } else {
-        MISSED
-    };
+    // Non-short-circuit `|` keeps the lane code branch-free.
+    let mut missed = !(disc >= zero) | !t1.is_finite() | !t0.is_finite();
+    let mut no_convergence = false;
     // 3. Surface normal (unnormalised), pointing to +z at the vertex.
     let (mut nx, mut ny, mut nz) = (-c * hx, -c * hy, one - c * (one + k) * hz);
-    if ASPH {
+    if SHAPE == ASPHERE {
         // Start from the conic hit, or from the tangent plane when the conic was missed.
-        let start = if status == OK {
-            [hx, hy, hz]
-        } else {
-            [x, y, zero]
-        };
+        let start = if missed { [x, y, zero] } else { [hx, hy, hz] };
         match refine_asphere(s, start, [dx, dy, dz]) {
             Some((h, n)) => {
                 [hx, hy, hz] = h;
                 [nx, ny, nz] = n;
-                if t0.is_finite() {
-                    status = OK;
-                }
+                missed = !t0.is_finite();
             }
-            None => status = status.max(NO_CONVERGENCE),
+            None => no_convergence = true,
         }
     }
-    let inv = one / (nx * nx + ny * ny + nz * nz).sqrt();
-    let (nx, ny, nz) = (nx * inv, ny * inv, nz * inv);
+    // On a sphere (−cx, −cy, 1 − cz) is already a unit vector: |N|² − 1 = c·F(x, y, z) = 0.
+    let (nx, ny, nz) = if SHAPE == SPHERE {
+        (nx, ny, nz)
+    } else {
+        let inv = one / (nx * nx + ny * ny + nz * nz).sqrt();
+        (nx * inv, ny * inv, nz * inv)
+    };
     let dn = dx * nx + dy * ny + dz * nz;
     let cos_i = dn.abs();
     // 4. Interaction.
+    let mut tir = false;
     match MODE {
         REFRACT => {
             let eta = s.eta;
             let kk = one - eta * eta * (one - cos_i * cos_i);
-            if !(kk >= zero) && status == OK {
-                status = TIR;
-            }
+            tir = !(kk >= zero);
             let cos_t = kk.max(zero).sqrt();
             // Normal oriented along the travel direction.
             let g = (cos_t - eta * cos_i) * one.copysign(dn);
@@ -123,7 +146,9 @@ pub(crate) fn advance<T: Real, const MODE: u8, const ASPH: bool>(
     }
     *p = [hx, hy, hz + s.z];
     StepOut {
-        status,
+        missed,
+        tir,
+        no_convergence,
         r2: hx * hx + hy * hy,
         cos_i,
     }

@@ -4,7 +4,7 @@
 use glam::DVec3;
 
 use super::fate::Fate;
-use super::lane::{self, advance_dyn};
+use super::lane::advance_dyn;
 use super::sequence::{Interaction, Sequence};
 
 /// A ray: a point and a unit direction (mm).
@@ -90,17 +90,15 @@ impl Sequence<f64> {
                 dir: DVec3::from_array(d),
             };
             let out = advance_dyn(step, &mut p, &mut d);
-            let terminal = match out.status {
-                lane::OK => None,
-                lane::TIR => Some(Fate::TotalInternalReflection {
-                    surface: step.surface,
-                }),
-                lane::NO_CONVERGENCE => Some(Fate::NoConvergence {
-                    surface: step.surface,
-                }),
-                _ => Some(Fate::Missed {
-                    surface: step.surface,
-                }),
+            let surface = step.surface;
+            let terminal = if out.missed {
+                Some(Fate::Missed { surface })
+            } else if out.no_convergence {
+                Some(Fate::NoConvergence { surface })
+            } else if out.tir {
+                Some(Fate::TotalInternalReflection { surface })
+            } else {
+                None
             };
             if let Some(f) = terminal {
                 if fate == Fate::Sensor {

@@ -166,10 +166,25 @@ impl Sequence<f64> {
                 step
             })
             .collect();
+        // Only a real boundary reflects: not the stop or the sensor, and not a dummy surface
+        // with the same index on both sides (a coating there would coat nothing).
+        let coatings = system
+            .surfaces
+            .iter()
+            .enumerate()
+            .map(|(i, s)| {
+                let boundary = s.kind == SurfaceKind::Refracting && n[i] != n[i + 1];
+                if boundary {
+                    s.coating.clone()
+                } else {
+                    Coating::None
+                }
+            })
+            .collect();
         Sequence {
             steps,
             lambda_nm,
-            coatings: system.surfaces.iter().map(|s| s.coating.clone()).collect(),
+            coatings,
         }
     }
 
