@@ -204,8 +204,8 @@ mod tests {
 
     #[test]
     fn ideal_quarter_wave_cancels_reflection_at_design_wavelength() {
-        let (n0, n2) = (1.0, 1.7);
-        let n1 = (n0 * n2 as f64).sqrt();
+        let (n0, n2) = (1.0f64, 1.7);
+        let n1 = (n0 * n2).sqrt();
         let r = quarter_wave(n1, 550.0).reflectance(n0, n2, 1.0, 550.0, true);
         assert!(r < 1e-15, "R = {r}");
         // Away from the design wavelength it reflects again, but less than bare glass.

@@ -1,1 +1,5 @@
-fn main() {}
+//! The `flarebench` command-line tool.
+
+fn main() -> std::process::ExitCode {
+    flarebench::cli::main()
+}

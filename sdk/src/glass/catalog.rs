@@ -222,7 +222,7 @@ fn edit_distance(a: &str, b: &str) -> usize {
 /// Builds a [`Dispersion`] from a refractiveindex.info formula number and its coefficients
 /// (`c0` followed by pairs).
 fn dispersion_from_formula(formula: &str, c: &[f64]) -> Result<Dispersion, String> {
-    if c.is_empty() || c.len() % 2 == 0 {
+    if c.is_empty() || c.len().is_multiple_of(2) {
         return Err(format!(
             "formula {formula} needs c0 and coefficient pairs, got {} numbers",
             c.len()

@@ -3,6 +3,11 @@
 //! Written without early returns so that, inlined into a loop over a packet of rays, it
 //! compiles to straight-line SIMD code for spherical and conic surfaces.
 
+#![allow(
+    clippy::neg_cmp_op_on_partial_ord,
+    reason = "`!(a >= b)` is deliberate: it is true for NaN, which must count as a failure"
+)]
+
 use super::real::Real;
 use super::sequence::Step;
 

@@ -1,0 +1,61 @@
+//! Command-line interface: argument parsing and dispatch.
+
+mod info;
+mod trace;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+/// flarebench — physically based lens flare from real lens prescriptions.
+#[derive(Debug, Parser)]
+#[command(name = "flarebench", version, about, long_about = None)]
+pub struct Cli {
+    /// Print no warnings or progress (errors still go to stderr).
+    #[arg(long, short, global = true)]
+    pub quiet: bool,
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Show a lens prescription and its paraxial data.
+    Info(info::InfoArgs),
+    /// Trace one collimated ray through a lens and show every surface it meets.
+    Trace(trace::TraceArgs),
+}
+
+/// Runs the command line; errors are printed with their causes.
+pub fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match &cli.command {
+        Command::Info(a) => info::run(a, cli.quiet),
+        Command::Trace(a) => trace::run(a, cli.quiet),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// Checks a wavelength argument (nm).
+fn wavelength(nm: f64) -> anyhow::Result<f64> {
+    anyhow::ensure!(
+        nm.is_finite() && (200.0..=2500.0).contains(&nm),
+        "--wavelength-nm must be between 200 and 2500 nm, got {nm}"
+    );
+    Ok(nm)
+}
+
+/// Formats a length for tables: `inf` for infinite values, else 4 decimals.
+fn fmt_len(v: f64) -> String {
+    if v.is_infinite() {
+        if v > 0.0 { "inf".into() } else { "-inf".into() }
+    } else {
+        format!("{v:.4}")
+    }
+}

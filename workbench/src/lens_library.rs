@@ -1,0 +1,90 @@
+//! Finding lens files: a path, or the name of a lens in the bundled library (`lenses/`).
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, bail};
+use flarebench_sdk::io::{LoadedLens, read_lens};
+
+/// Extensions tried when a bundled lens is named without one.
+const EXTENSIONS: &[&str] = &["xml", "zmx", "dat"];
+
+/// Directories searched for bundled lenses, in order: `$FLAREBENCH_LENS_DIR`, `lenses/` beside
+/// the executable or two levels up (a cargo target dir), then the source tree's `lenses/`.
+pub fn library_dirs() -> Vec<PathBuf> {
+    let mut dirs = Vec::new();
+    if let Some(d) = std::env::var_os("FLAREBENCH_LENS_DIR") {
+        dirs.push(PathBuf::from(d));
+    }
+    if let Ok(exe) = std::env::current_exe()
+        && let Some(bin_dir) = exe.parent()
+    {
+        dirs.push(bin_dir.join("lenses"));
+        if let Some(up) = bin_dir.parent().and_then(Path::parent) {
+            dirs.push(up.join("lenses"));
+        }
+    }
+    dirs.push(Path::new(env!("CARGO_MANIFEST_DIR")).join("../lenses"));
+    dirs.into_iter().filter(|d| d.is_dir()).collect()
+}
+
+/// The path of `spec`: an existing file, or a bundled lens name such as `heliar-tronnier`.
+pub fn resolve(spec: &str) -> anyhow::Result<PathBuf> {
+    let direct = Path::new(spec);
+    if direct.is_file() {
+        return Ok(direct.to_path_buf());
+    }
+    let dirs = library_dirs();
+    for dir in &dirs {
+        let candidate = dir.join(spec);
+        if candidate.is_file() {
+            return Ok(candidate);
+        }
+        for ext in EXTENSIONS {
+            let candidate = dir.join(format!("{spec}.{ext}"));
+            if candidate.is_file() {
+                return Ok(candidate);
+            }
+        }
+    }
+    let names = bundled_names();
+    if names.is_empty() {
+        bail!("no lens file `{spec}` (and no bundled lens library was found)");
+    }
+    bail!(
+        "no lens file `{spec}`; bundled lenses: {}",
+        names.join(", ")
+    )
+}
+
+/// Names of the bundled lenses (file stems), sorted.
+pub fn bundled_names() -> Vec<String> {
+    let mut names: Vec<String> = library_dirs()
+        .iter()
+        .take(1)
+        .flat_map(|d| std::fs::read_dir(d).into_iter().flatten().flatten())
+        .filter_map(|e| {
+            let p = e.path();
+            let ext = p.extension()?.to_str()?;
+            EXTENSIONS
+                .contains(&ext)
+                .then(|| p.file_stem()?.to_str().map(str::to_string))?
+        })
+        .collect();
+    names.sort();
+    names.dedup();
+    names
+}
+
+/// Resolves and loads a lens; warnings are printed to stderr unless `quiet`.
+pub fn load(spec: &str, quiet: bool) -> anyhow::Result<LoadedLens> {
+    let path = resolve(spec)?;
+    let loaded = read_lens(&path)
+        .map_err(anyhow::Error::new)
+        .with_context(|| format!("could not load lens `{spec}`"))?;
+    if !quiet {
+        for w in &loaded.warnings {
+            eprintln!("warning: {w}");
+        }
+    }
+    Ok(loaded)
+}

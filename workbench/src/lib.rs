@@ -1,0 +1,7 @@
+//! flarebench, the application: command line, lens resolution, reports.
+//!
+//! The optics live in `flarebench-sdk`; this crate turns them into commands.
+
+pub mod cli;
+pub mod lens_library;
+pub mod table;
