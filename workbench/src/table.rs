@@ -61,7 +61,7 @@ mod tests {
         t.row(vec!["x".into(), "-12.25".into()]);
         assert_eq!(
             t.render(),
-            "a          value\nlong name    1.5\nx         -12.25\n"
+            "a          value\nlong name     1.5\nx          -12.25\n"
         );
     }
 }

@@ -1,0 +1,201 @@
+//! End-to-end tests of the `flarebench` binary: real output, real exit codes.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+use serde_json::Value;
+
+fn flarebench(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_flarebench"))
+        .args(args)
+        .output()
+        .expect("binary runs")
+}
+
+fn json(args: &[&str]) -> Value {
+    let out = flarebench(args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("valid JSON")
+}
+
+fn temp_file(name: &str, text: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("flarebench-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+#[test]
+fn info_json_gives_paraxial_data_and_surfaces() {
+    let v = json(&["info", "heliar-tronnier", "--json"]);
+    assert!(
+        (v["efl_mm"].as_f64().unwrap() - 99.2358).abs() < 1e-3,
+        "{v}"
+    );
+    for key in [
+        "bfl_mm",
+        "f_number",
+        "entrance_pupil_diameter_mm",
+        "total_track_mm",
+    ] {
+        assert!(v[key].as_f64().is_some(), "missing {key}");
+    }
+    assert!(
+        (v["f_number"].as_f64().unwrap() - 22.0).abs() < 1e-9,
+        "the stop closes to f/22"
+    );
+    assert!((v["total_track_mm"].as_f64().unwrap() - 114.077).abs() < 1e-3);
+    let surfaces = v["surfaces"].as_array().unwrap();
+    assert_eq!(surfaces.len(), 10);
+    assert_eq!(surfaces[5]["kind"], "stop");
+    assert_eq!(surfaces[9]["kind"], "sensor");
+}
+
+#[test]
+fn info_follows_the_wavelength() {
+    let d = json(&["info", "heliar-tronnier", "--json"]);
+    let f = json(&[
+        "info",
+        "heliar-tronnier",
+        "--json",
+        "--wavelength-nm",
+        "486.1327",
+    ]);
+    let (ed, ef) = (d["efl_mm"].as_f64().unwrap(), f["efl_mm"].as_f64().unwrap());
+    // Glass indices rise toward the blue, so the focal length shortens.
+    assert!(ef < ed - 0.05, "EFL at F {ef} vs d {ed}");
+    assert_eq!(f["wavelength_nm"].as_f64().unwrap(), 486.1327);
+}
+
+#[test]
+fn info_table_shows_the_prescription() {
+    let out = flarebench(&["info", "double-gauss-50mm"]);
+    assert!(out.status.success());
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("effective focal length"), "{text}");
+    assert!(text.contains("50.35"), "{text}");
+    assert!(text.contains("stop"));
+}
+
+#[test]
+fn trace_reaches_the_sensor_on_axis() {
+    let v = json(&[
+        "trace",
+        "heliar-tronnier",
+        "--field-deg",
+        "0",
+        "--height-mm",
+        "1",
+        "--json",
+    ]);
+    assert_eq!(v["fate"], "sensor");
+    assert!(v["fate_surface"].is_null());
+    let hits = v["hits"].as_array().unwrap();
+    assert_eq!(hits.len(), 10);
+    assert!(v["x_mm"].as_f64().unwrap().abs() < 1e-12);
+    // A ray 1 mm off axis crosses near focus: the sensor is 1.54 mm behind the paraxial focus,
+    // so it lands at about −1 · 1.54/81.3 mm (plus spherical aberration), i.e. near −0.02 mm.
+    let y = v["y_mm"].as_f64().unwrap();
+    assert!(y < 0.0 && y > -0.05, "y = {y}");
+}
+
+#[test]
+fn trace_reports_vignetting_and_still_gives_the_landing_point() {
+    // The Heliar's stop at f/22 has a working radius of about 2.05 mm: a 6 mm ray is blocked.
+    let v = json(&[
+        "trace",
+        "heliar-tronnier",
+        "--field-deg",
+        "0",
+        "--height-mm",
+        "6",
+        "--json",
+    ]);
+    assert_eq!(v["fate"], "vignetted");
+    assert_eq!(v["fate_surface"], 5);
+    assert!(v["x_mm"].is_number() && v["y_mm"].is_number());
+}
+
+#[test]
+fn trace_azimuth_rotates_the_landing_point() {
+    let a = json(&[
+        "trace",
+        "nikon-zoom-short",
+        "--field-deg",
+        "5",
+        "--height-mm",
+        "2",
+        "--json",
+    ]);
+    let b = json(&[
+        "trace",
+        "nikon-zoom-short",
+        "--field-deg",
+        "5",
+        "--height-mm",
+        "2",
+        "--azimuth-deg",
+        "90",
+        "--json",
+    ]);
+    let (ya, xb) = (a["y_mm"].as_f64().unwrap(), b["x_mm"].as_f64().unwrap());
+    assert!(
+        (ya + xb).abs() < 1e-9,
+        "rotation by 90° maps y to −x: {ya} vs {xb}"
+    );
+}
+
+#[test]
+fn a_lens_path_works_like_a_name() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../lenses/cooke-triplet-25mm.xml"
+    );
+    let v = json(&["info", path, "--json"]);
+    assert!((v["efl_mm"].as_f64().unwrap() - 24.9907).abs() < 1e-3);
+}
+
+#[test]
+fn a_bad_file_gives_file_line_and_field_and_no_panic() {
+    let p = temp_file(
+        "bad.xml",
+        "<opticalSystem>\n  <elements>\n    <element>\n      <type>lensSpherical</type>\n      <radius>abc</radius>\n",
+    );
+    let out = flarebench(&["info", p.to_str().unwrap()]);
+    assert!(!out.status.success());
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert!(err.contains("bad.xml:"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+}
+
+#[test]
+fn an_unknown_lens_lists_the_library() {
+    let out = flarebench(&["info", "no-such-lens"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert!(
+        err.contains("no lens file `no-such-lens`") && err.contains("heliar-tronnier"),
+        "{err}"
+    );
+}
+
+#[test]
+fn out_of_range_arguments_are_refused() {
+    let out = flarebench(&[
+        "trace",
+        "heliar-tronnier",
+        "--field-deg",
+        "95",
+        "--height-mm",
+        "1",
+    ]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--field-deg"));
+    let out = flarebench(&["info", "heliar-tronnier", "--wavelength-nm", "5"]);
+    assert!(!out.status.success());
+}
