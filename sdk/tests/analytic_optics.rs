@@ -286,3 +286,111 @@ fn batched_f64_matches_scalar_exactly_and_f32_closely() {
         );
     }
 }
+
+/// A paraboloid written as a conic (k = −1) and as an even asphere on a flat base
+/// (z = r²/(2R)) is the same surface: both paths give the same hits.
+#[test]
+fn conic_and_asphere_descriptions_of_a_paraboloid_agree() {
+    let r = 60.0;
+    let mut conic = Surface::spherical(r, 5.0, glass(1.6), 14.0);
+    conic.conic = -1.0;
+    let mut asph = Surface::spherical(0.0, 5.0, glass(1.6), 14.0);
+    asph.aspheric[0] = 0.5 / r;
+    let mk = |s: Surface| {
+        LensSystem::new(
+            "parabola",
+            vec![
+                Surface::stop(1.0, 13.0),
+                s,
+                Surface::spherical(-80.0, 70.0, Medium::Air, 14.0),
+                Surface::sensor(30.0),
+            ],
+        )
+    };
+    let (a, b) = (
+        Sequence::forward(&mk(conic), LAMBDA),
+        Sequence::forward(&mk(asph), LAMBDA),
+    );
+    for &(h, field) in &[(0.0, 0.0), (5.0, 0.0), (12.0, 0.1), (-9.0, -0.2)] {
+        let ray = Ray::collimated(field, 0.4, h);
+        let (mut ha, mut hb) = (Vec::new(), Vec::new());
+        let ra = a.trace_with_hits(&ray, &mut ha);
+        let rb = b.trace_with_hits(&ray, &mut hb);
+        assert_eq!(ra.fate, rb.fate);
+        for (x, y) in ha.iter().zip(&hb) {
+            assert!(
+                (x.position - y.position).length() < 1e-10,
+                "{} vs {}",
+                x.position,
+                y.position
+            );
+            assert!((x.direction - y.direction).length() < 1e-10);
+        }
+    }
+}
+
+/// A paraboloidal mirror focuses every ray parallel to its axis exactly at R/2 — not only
+/// paraxial ones (a sphere would show spherical aberration).
+#[test]
+fn paraboloid_mirror_focuses_all_parallel_rays_at_half_the_radius() {
+    let mut mirror = Surface::spherical(-200.0, 0.0, glass(1.5), 60.0);
+    mirror.conic = -1.0;
+    let sys = LensSystem::new(
+        "parabolic mirror",
+        vec![Surface::stop(0.0, 60.0), mirror, Surface::sensor(30.0)],
+    );
+    let seq = Sequence::custom(&sys, LAMBDA, true, &[(1, Interaction::Reflect)]).unwrap();
+    let mut sphere_sys = sys.clone();
+    sphere_sys.surfaces[1].conic = 0.0;
+    let sphere = Sequence::custom(&sphere_sys, LAMBDA, true, &[(1, Interaction::Reflect)]).unwrap();
+    let crossing = |seq: &Sequence<f64>, h: f64| {
+        let r = seq.trace(&Ray::collimated(0.0, 0.0, h));
+        r.ray.origin.z - r.ray.origin.y / r.ray.dir.y * r.ray.dir.z
+    };
+    for h in [1.0, 10.0, 30.0, 55.0] {
+        let z = crossing(&seq, h);
+        assert!((z + 100.0).abs() < 1e-9, "h = {h}: focus at {z}");
+    }
+    // The sphere of the same radius focuses its margin short of R/2.
+    assert!((crossing(&sphere, 55.0) + 100.0).abs() > 1.0);
+}
+
+/// An even asphere with real higher-order terms: the Newton intersection lands on the
+/// surface (sag(r) = z to 1e-12 mm) and the refracted ray obeys Snell's law about the
+/// asphere's normal.
+#[test]
+fn asphere_intersection_lies_on_the_surface() {
+    let mut s = Surface::spherical(40.0, 6.0, glass(1.58), 15.0);
+    s.conic = -0.6;
+    s.aspheric = [0.0, 2e-5, -3e-8, 1e-11, 0.0, 0.0, 0.0, 0.0];
+    let sys = LensSystem::new(
+        "asphere",
+        vec![
+            Surface::stop(2.0, 14.0),
+            s.clone(),
+            Surface::spherical(-100.0, 50.0, Medium::Air, 15.0),
+            Surface::sensor(30.0),
+        ],
+    );
+    let seq = Sequence::forward(&sys, LAMBDA);
+    for &(h, field, az) in &[(3.0, 0.0, 0.0), (11.0, 0.15, 0.3), (-13.0, -0.25, 2.0)] {
+        let mut hits = Vec::new();
+        let r = seq.trace_with_hits(&Ray::collimated(field, az, h), &mut hits);
+        assert!(r.completed, "{:?}", r.fate);
+        let p = hits[1].position;
+        let z_local = p.z - 2.0;
+        let sag = s.sag(p.x.hypot(p.y)).unwrap();
+        assert!(
+            (z_local - sag).abs() < 1e-12,
+            "off the surface by {}",
+            z_local - sag
+        );
+        // Snell about the numerical normal of z = sag(r).
+        let rr = p.x.hypot(p.y);
+        let e = 1e-6;
+        let slope = (s.sag(rr + e).unwrap() - s.sag(rr - e).unwrap()) / (2.0 * e);
+        let n = DVec3::new(-slope * p.x / rr, -slope * p.y / rr, 1.0).normalize();
+        let (din, dout) = (hits[0].direction, hits[1].direction);
+        assert!((din.cross(n).length() - 1.58 * dout.cross(n).length()).abs() < 1e-8);
+    }
+}
