@@ -97,7 +97,9 @@ impl<T: Real> RayBatch<T> {
         &self.packets
     }
 
-    /// Position, direction, fate and largest relative radius of ray `i`.
+    /// Position, direction, fate and largest relative radius of ray `i`. Position and direction
+    /// are meaningful only for a ray that [completed](Self::completed) every step; for one that
+    /// stopped (missed a surface, total internal reflection) they are unspecified.
     pub fn get(&self, i: usize) -> ([T; 3], [T; 3], Fate, T) {
         assert!(i < self.len, "ray {i} of {}", self.len);
         let (p, l) = (&self.packets[i / LANES], i % LANES);
@@ -153,26 +155,22 @@ fn step_packet<T: Real, const MODE: u8, const SHAPE: u8>(s: &Step<T>, p: &mut Pa
     let missed = Fate::Missed { surface }.encode();
     let tir = Fate::TotalInternalReflection { surface }.encode();
     let no_convergence = Fate::NoConvergence { surface }.encode();
-    // Old values are read up front and every write is a select: this shape lets LLVM turn the
-    // loop into SIMD code (conditional read-modify-writes keep it scalar).
+    // Every lane is written unconditionally with values selected in registers: conditional
+    // read-modify-writes would keep the loop scalar or become masked stores, which are slow on
+    // AMD cores. A ray that has stopped keeps computing (harmlessly, on NaNs) but its fate and
+    // largest radius no longer change.
     for i in 0..LANES {
-        let (x0, y0, z0) = (p.x[i], p.y[i], p.z[i]);
-        let (dx0, dy0, dz0) = (p.dx[i], p.dy[i], p.dz[i]);
+        let mut pos = [p.x[i], p.y[i], p.z[i]];
+        let mut dir = [p.dx[i], p.dy[i], p.dz[i]];
         let (m0, f0) = (p.max_rel2[i], p.fate[i]);
-        let mut pos = [x0, y0, z0];
-        let mut dir = [dx0, dy0, dz0];
         let out = advance::<T, MODE, SHAPE>(s, &mut pos, &mut dir);
         let alive = f0 & TERMINATED == 0;
         let fail = out.missed | out.tir | out.no_convergence;
         let upd = alive & !fail;
         let rel2 = out.r2 * s.inv_semi2;
-        p.x[i] = if upd { pos[0] } else { x0 };
-        p.y[i] = if upd { pos[1] } else { y0 };
-        p.z[i] = if upd { pos[2] } else { z0 };
-        p.dx[i] = if upd { dir[0] } else { dx0 };
-        p.dy[i] = if upd { dir[1] } else { dy0 };
-        p.dz[i] = if upd { dir[2] } else { dz0 };
-        p.max_rel2[i] = if upd { rel2.max(m0) } else { m0 };
+        [p.x[i], p.y[i], p.z[i]] = pos;
+        [p.dx[i], p.dy[i], p.dz[i]] = dir;
+        p.max_rel2[i] = m0.max(if upd { rel2 } else { T::zero() });
         let fail_code = if out.missed {
             missed
         } else if out.no_convergence {
@@ -181,16 +179,19 @@ fn step_packet<T: Real, const MODE: u8, const SHAPE: u8>(s: &Step<T>, p: &mut Pa
             tir
         };
         let event = if fail {
-            fail_code
+            fail_code | TERMINATED
         } else if rel2 > T::one() {
             vignetted
         } else {
             0
         };
-        let earlier = f0 & !TERMINATED;
-        let first = if earlier == 0 { event } else { earlier };
-        let term = if fail { TERMINATED } else { 0 };
-        p.fate[i] = if alive { first | term } else { f0 };
+        // Only the first event is kept; a stopped ray's code no longer changes.
+        let first = if f0 == 0 {
+            event
+        } else {
+            f0 | (event & TERMINATED)
+        };
+        p.fate[i] = if alive { first } else { f0 };
     }
 }
 
