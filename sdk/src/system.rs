@@ -198,6 +198,9 @@ pub struct LensSystem {
     pub stated_efl_mm: Option<f64>,
     /// The full field of view the file claims (degrees, informational).
     pub field_of_view_deg: Option<f64>,
+    /// The design's primary wavelength (nm), e.g. Zemax `PWAV`: paraxial data and single-ray
+    /// traces default to it; `None` means the d line (587.5618 nm).
+    pub primary_wavelength_nm: Option<f64>,
     pub film_width_mm: f64,
     pub film_height_mm: f64,
     /// Free-form notes (patent, caveats).
@@ -235,12 +238,19 @@ impl LensSystem {
             f_number: None,
             stated_efl_mm: None,
             field_of_view_deg: None,
+            primary_wavelength_nm: None,
             film_width_mm: 36.0,
             film_height_mm: 24.0,
             notes: String::new(),
             source: String::new(),
             surfaces,
         }
+    }
+
+    /// The wavelength paraxial data and single-ray traces default to: the primary wavelength
+    /// when the file names one, else the d line.
+    pub fn default_wavelength_nm(&self) -> f64 {
+        self.primary_wavelength_nm.unwrap_or(LAMBDA_D_NM)
     }
 
     /// Index of the aperture stop, if there is one.
@@ -314,6 +324,14 @@ impl LensSystem {
             && !(n.is_finite() && n > 0.0)
         {
             sys("fnumber", format!("must be a positive number, got {n}"));
+        }
+        if let Some(w) = self.primary_wavelength_nm
+            && !(w.is_finite() && w > 0.0)
+        {
+            sys(
+                "primaryWavelength",
+                format!("must be a positive wavelength in nm, got {w}"),
+            );
         }
         for (field, v) in [
             ("filmWidth", self.film_width_mm),

@@ -33,6 +33,7 @@ mod tags {
         "fieldOfView",
         "filmWidth",
         "filmHeight",
+        "primaryWavelength",
         "elements",
         "notes",
         "source",

@@ -77,6 +77,7 @@ fn read_system(
     let f_number = unset_zero(number(ctx, f.get("fnumber"))?);
     let stated_efl_mm = unset_zero(number(ctx, f.get("effectiveFocalLength"))?);
     let field_of_view_deg = unset_zero(number(ctx, f.get("fieldOfView"))?);
+    let primary_wavelength_nm = number(ctx, f.get("primaryWavelength"))?;
     let mut film = [
         ("filmWidth", DEFAULT_FILM_MM.0),
         ("filmHeight", DEFAULT_FILM_MM.1),
@@ -118,6 +119,7 @@ fn read_system(
         f_number,
         stated_efl_mm,
         field_of_view_deg,
+        primary_wavelength_nm,
         film_width_mm,
         film_height_mm,
         notes: text(f.get("notes")).unwrap_or_default(),

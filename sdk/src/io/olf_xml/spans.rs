@@ -39,6 +39,7 @@ fn tags_for(field: &str) -> &[&'static str] {
         "fnumber" => &["fnumber"],
         "filmWidth" => &["filmWidth"],
         "filmHeight" => &["filmHeight"],
+        "primaryWavelength" => &["primaryWavelength"],
         _ => &[],
     }
 }

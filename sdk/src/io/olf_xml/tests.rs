@@ -174,8 +174,15 @@ fn our_extensions_round_trip() {
         },
     ]);
     s.f_number = None;
+    s.primary_wavelength_nm = Some(780.0);
     let text = write_xml(&s);
     assert!(text.contains("<glass>SCHOTT:N-BK7</glass>"), "{text}");
+    assert!(
+        text.contains(
+            "<filmHeight>24</filmHeight>\n    <primaryWavelength>780</primaryWavelength>"
+        ),
+        "{text}"
+    );
     assert!(text.contains("<abbeNumber>inf</abbeNumber>"), "{text}");
     assert!(
         text.contains("<aspheric>0 0.0000001 -0.000000000025</aspheric>"),
@@ -362,6 +369,14 @@ fn validation_issues_map_to_their_fields() {
     );
     // A negative f-number is a system field.
     expect_error("<fnumber>4<", "<fnumber>-4<", "fnumber", 4);
+    // So is the primary wavelength.
+    let e = expect_error(
+        "<fnumber>4</fnumber>",
+        "<fnumber>4</fnumber><primaryWavelength>-550</primaryWavelength>",
+        "primaryWavelength",
+        4,
+    );
+    assert!(e.message.contains("positive wavelength"), "{e}");
     // A stop must be flat.
     expect_error(
         "<thickness>45</thickness>",
@@ -562,7 +577,7 @@ fn system() -> impl Strategy<Value = LensSystem> {
     let opt = || proptest::option::of(nonzero());
     (
         text_strategy("[a-zA-Z0-9][a-zA-Z0-9 &<>._-]{0,20}"),
-        (opt(), opt(), opt()),
+        (opt(), opt(), opt(), opt()),
         (finite(), finite()),
         text_strategy("[a-zA-Z0-9 &<>\"'.,;:()/\n-]{0,60}"),
         text_strategy("[a-zA-Z0-9 &<>.,:/-]{0,40}"),
@@ -571,7 +586,7 @@ fn system() -> impl Strategy<Value = LensSystem> {
         .prop_map(
             |(
                 name,
-                (f_number, stated_efl_mm, field_of_view_deg),
+                (f_number, stated_efl_mm, field_of_view_deg, primary_wavelength_nm),
                 (w, h),
                 notes,
                 source,
@@ -582,6 +597,7 @@ fn system() -> impl Strategy<Value = LensSystem> {
                     f_number,
                     stated_efl_mm,
                     field_of_view_deg,
+                    primary_wavelength_nm,
                     film_width_mm: w,
                     film_height_mm: h,
                     notes,

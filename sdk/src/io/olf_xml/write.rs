@@ -78,6 +78,9 @@ fn write(system: &LensSystem, flavor: Flavor) -> String {
                     let _ = write!(comment, "\n{label}: {}", text.trim());
                 }
             }
+            if let Some(w) = system.primary_wavelength_nm {
+                let _ = write!(comment, "\nPrimary wavelength: {} nm", num(w));
+            }
             // `--` may not appear inside an XML comment.
             let _ = writeln!(out, "<!--\n{}\n-->", comment.replace("--", "- -"));
         }
@@ -99,6 +102,9 @@ fn write(system: &LensSystem, flavor: Flavor) -> String {
     tag("filmWidth", &num(system.film_width_mm));
     tag("filmHeight", &num(system.film_height_mm));
     if flavor == Flavor::Flarebench {
+        if let Some(w) = system.primary_wavelength_nm {
+            tag("primaryWavelength", &num(w));
+        }
         for (name, text) in [("source", &system.source), ("notes", &system.notes)] {
             if !text.trim().is_empty() {
                 tag(name, &escape(text.trim()));
