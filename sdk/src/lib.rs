@@ -14,6 +14,7 @@
 
 pub mod coating;
 pub mod fresnel;
+pub mod ghost;
 pub mod glass;
 pub mod io;
 pub mod paraxial;

@@ -7,7 +7,7 @@ use rayon::prelude::*;
 use super::fate::Fate;
 use super::lane::{advance, dispatch_step};
 use super::real::Real;
-use super::sequence::{Sequence, Step};
+use super::sequence::{InterfaceTable, Sequence, Step};
 
 /// Rays per packet.
 pub const LANES: usize = 64;
@@ -28,6 +28,12 @@ pub struct Packet<T> {
     pub max_rel2: [T; LANES],
     /// Encoded [`Fate`] (first event) plus a terminated flag.
     pub fate: [u32; LANES],
+    /// Fresnel/coating throughput so far (starts at 1; updated only by sequences with
+    /// interface tables, see [`Sequence::with_interface_tables`]).
+    pub weight: [T; LANES],
+    /// Where the ray crossed the aperture stop (its last pass), global x and y.
+    pub stop_x: [T; LANES],
+    pub stop_y: [T; LANES],
 }
 
 impl<T: Real> Default for Packet<T> {
@@ -42,7 +48,22 @@ impl<T: Real> Default for Packet<T> {
             dz: [T::one(); LANES],
             max_rel2: z,
             fate: [0; LANES],
+            weight: [T::one(); LANES],
+            stop_x: z,
+            stop_y: z,
         }
+    }
+}
+
+impl<T> Packet<T> {
+    /// True when the ray in `lane` carried out every step so far (it did not stop).
+    pub fn completed(&self, lane: usize) -> bool {
+        self.fate[lane] & TERMINATED == 0
+    }
+
+    /// The fate (first event) of the ray in `lane`.
+    pub fn fate_of(&self, lane: usize) -> Fate {
+        Fate::decode(self.fate[lane])
     }
 }
 
@@ -89,6 +110,7 @@ impl<T: Real> RayBatch<T> {
         (p.dx[lane], p.dy[lane], p.dz[lane]) = (dir[0], dir[1], dir[2]);
         p.max_rel2[lane] = T::zero();
         p.fate[lane] = 0;
+        p.weight[lane] = T::one();
         self.len += 1;
     }
 
@@ -135,21 +157,53 @@ impl<T: Real> Sequence<T> {
 
     /// Traces one packet through every step.
     pub fn trace_packet(&self, p: &mut Packet<T>) {
-        trace_packet_dispatch(&self.steps, p);
+        trace_packet_dispatch(&self.steps, &self.tables, p);
     }
 }
 
 /// The packet kernel, compiled for the baseline CPU and for AVX2 + FMA, chosen at run time.
 /// (Products and sums are not contracted into FMAs, so every version gives the same bits.)
 #[multiversion::multiversion(targets("x86_64+avx2+fma"))]
-fn trace_packet_dispatch<T: Real>(steps: &[Step<T>], p: &mut Packet<T>) {
+fn trace_packet_dispatch<T: Real>(steps: &[Step<T>], tables: &[InterfaceTable<T>], p: &mut Packet<T>) {
     for s in steps {
-        dispatch_step!(s, step_packet, s, p);
+        match s.table.map(|t| &tables[t as usize]) {
+            Some(t) => dispatch_step!(s, step_packet_weighted, s, t, p),
+            None => dispatch_step!(s, step_packet, s, p),
+        }
+        if s.record_stop {
+            p.stop_x = p.x;
+            p.stop_y = p.y;
+        }
+    }
+}
+
+/// A step that also multiplies each ray's weight by the interface's Fresnel/coating factor
+/// at its angle of incidence.
+#[inline(always)]
+fn step_packet_weighted<T: Real, const MODE: u8, const SHAPE: u8>(
+    s: &Step<T>,
+    table: &InterfaceTable<T>,
+    p: &mut Packet<T>,
+) {
+    let mut cos = [T::zero(); LANES];
+    step_lanes::<T, MODE, SHAPE>(s, p, &mut cos);
+    for i in 0..LANES {
+        p.weight[i] = p.weight[i] * table.at(cos[i]);
     }
 }
 
 #[inline(always)]
 fn step_packet<T: Real, const MODE: u8, const SHAPE: u8>(s: &Step<T>, p: &mut Packet<T>) {
+    let mut cos = [T::zero(); LANES];
+    step_lanes::<T, MODE, SHAPE>(s, p, &mut cos);
+}
+
+#[inline(always)]
+fn step_lanes<T: Real, const MODE: u8, const SHAPE: u8>(
+    s: &Step<T>,
+    p: &mut Packet<T>,
+    cos: &mut [T; LANES],
+) {
     let surface = s.surface;
     let vignetted = Fate::Vignetted { surface }.encode();
     let missed = Fate::Missed { surface }.encode();
@@ -164,6 +218,7 @@ fn step_packet<T: Real, const MODE: u8, const SHAPE: u8>(s: &Step<T>, p: &mut Pa
         let mut dir = [p.dx[i], p.dy[i], p.dz[i]];
         let (m0, f0) = (p.max_rel2[i], p.fate[i]);
         let out = advance::<T, MODE, SHAPE>(s, &mut pos, &mut dir);
+        cos[i] = out.cos_i;
         let alive = f0 & TERMINATED == 0;
         let fail = out.missed | out.tir | out.no_convergence;
         let upd = alive & !fail;

@@ -22,4 +22,4 @@ pub use batch::{LANES, Packet, RayBatch};
 pub use fate::Fate;
 pub use real::Real;
 pub use scalar::{Hit, Ray, TraceResult};
-pub use sequence::{Interaction, PathError, Sequence, Step};
+pub use sequence::{Interaction, InterfaceTable, PathError, Sequence, Step, TABLE_LEN};

@@ -10,6 +10,8 @@ pub trait Real: Float + Send + Sync + std::fmt::Debug + Default + 'static {
     fn to_f64(self) -> f64;
     /// Tolerance (mm) for the asphere Newton iteration.
     const NEWTON_TOL: Self;
+    /// Truncates a non-negative value to an index (saturating; NaN gives 0).
+    fn to_index(self) -> usize;
 }
 
 impl Real for f32 {
@@ -20,6 +22,9 @@ impl Real for f32 {
         self as f64
     }
     const NEWTON_TOL: Self = 1e-5;
+    fn to_index(self) -> usize {
+        self as u32 as usize
+    }
 }
 
 impl Real for f64 {
@@ -30,4 +35,7 @@ impl Real for f64 {
         self
     }
     const NEWTON_TOL: Self = 1e-12;
+    fn to_index(self) -> usize {
+        self as u32 as usize
+    }
 }

@@ -40,6 +40,34 @@ pub struct Step<T> {
     pub n_to: f64,
     /// `n_from / n_to`, the refraction ratio.
     pub eta: T,
+    /// Index into [`Sequence::tables`] of this interface's Fresnel/coating factor, when the
+    /// sequence carries tables.
+    pub table: Option<u32>,
+    /// True on the ray's last pass through the aperture stop: batches record the crossing.
+    pub record_stop: bool,
+}
+
+/// Entries per interface table (uniform in cos θ from 0 to 1).
+pub const TABLE_LEN: usize = 256;
+
+/// An interface's transmittance (refraction) or reflectance (reflection) as a function of the
+/// cosine of the angle of incidence, tabulated for linear interpolation in the batch kernel.
+#[derive(Clone, Debug)]
+pub struct InterfaceTable<T> {
+    pub values: [T; TABLE_LEN],
+}
+
+impl<T: Real> InterfaceTable<T> {
+    /// Linear interpolation at `cos` (clamped to [0, 1]; NaN reads entry 0).
+    #[inline(always)]
+    pub fn at(&self, cos: T) -> T {
+        let scale = T::of((TABLE_LEN - 1) as f64);
+        let x = (cos * scale).max(T::zero()).min(scale);
+        let i = x.to_index().min(TABLE_LEN - 2);
+        let f = x - T::of(i as f64);
+        let (a, b) = (self.values[i], self.values[i + 1]);
+        a + f * (b - a)
+    }
 }
 
 /// Why a path could not be built.
@@ -62,6 +90,8 @@ pub struct Sequence<T> {
     pub lambda_nm: f64,
     /// The coating of each surface of the system (for intensities along the path).
     pub coatings: Vec<Coating>,
+    /// Interface factor tables referenced by [`Step::table`] (empty unless built).
+    pub tables: Vec<InterfaceTable<T>>,
 }
 
 impl Sequence<f64> {
@@ -159,6 +189,8 @@ impl Sequence<f64> {
                     n_from,
                     n_to,
                     eta: n_from / n_to,
+                    table: None,
+                    record_stop: false,
                 };
                 if interaction == Interaction::Reflect {
                     forward = !forward;
@@ -181,11 +213,43 @@ impl Sequence<f64> {
                 }
             })
             .collect();
-        Sequence {
+        let mut seq = Sequence {
             steps,
             lambda_nm,
             coatings,
+            tables: Vec::new(),
+        };
+        // Batches record where a ray crosses the stop on its last pass (the aperture mask's UV).
+        if let Some(stop) = system.stop_index()
+            && let Some(last) = seq.steps.iter().rposition(|s| s.surface == stop)
+        {
+            seq.steps[last].record_stop = true;
         }
+        seq
+    }
+
+    /// Builds the Fresnel/coating factor table of every step that changes a ray's weight
+    /// (a refraction or reflection at a real boundary), so batches track the throughput.
+    pub fn with_interface_tables(mut self) -> Self {
+        self.tables.clear();
+        for i in 0..self.steps.len() {
+            let s = self.steps[i];
+            let coating = &self.coatings[s.surface];
+            let boundary = s.n_from != s.n_to || *coating != Coating::None;
+            if !boundary || s.interaction == Interaction::Sensor {
+                self.steps[i].table = None;
+                continue;
+            }
+            let mut values = [0.0; TABLE_LEN];
+            for (j, v) in values.iter_mut().enumerate() {
+                let cos = j as f64 / (TABLE_LEN - 1) as f64;
+                let r = coating.reflectance(s.n_from, s.n_to, cos, self.lambda_nm, s.forward);
+                *v = if s.interaction == Interaction::Reflect { r } else { 1.0 - r };
+            }
+            self.steps[i].table = Some(self.tables.len() as u32);
+            self.tables.push(InterfaceTable { values });
+        }
+        self
     }
 
     /// The same sequence in another float type (geometry rounded once, here).
@@ -208,10 +272,17 @@ impl Sequence<f64> {
                     n_from: s.n_from,
                     n_to: s.n_to,
                     eta: U::of(s.eta),
+                    table: s.table,
+                    record_stop: s.record_stop,
                 })
                 .collect(),
             lambda_nm: self.lambda_nm,
             coatings: self.coatings.clone(),
+            tables: self
+                .tables
+                .iter()
+                .map(|t| InterfaceTable { values: t.values.map(U::of) })
+                .collect(),
         }
     }
 }

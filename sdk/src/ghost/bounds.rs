@@ -1,0 +1,297 @@
+//! Ghost bounds per incidence angle: the rectangle of the entrance plane whose rays reach the
+//! sensor along a ghost path, where they land, how fine a grid the ghost needs and how bright
+//! it is. Two modes:
+//!
+//! - **approximate** (paraxial): each clear aperture met along the path bounds the entrance
+//!   height linearly (`|A·y0 + B·u| ≤ semi-diameter`); intervals intersect. Microseconds per
+//!   ghost; exact for small angles and apertures, generous or tight elsewhere.
+//! - **precise** (traced): a grid over the front element is traced, the bounding box of the
+//!   rays that pass every aperture is refined twice on finer grids, and the ghost's energy
+//!   share and grid size are measured on the last grid.
+//!
+//! Bounds are computed in the meridional frame (light in the y–z plane); for a light at
+//! azimuth φ the rectangle and the sensor bounds rotate with it about the axis.
+
+use serde::{Deserialize, Serialize};
+
+use crate::paraxial::stop_opening;
+use crate::system::LensSystem;
+use crate::trace::{Interaction, Sequence};
+
+use super::enumerate::GhostPath;
+use super::grid::{GridTrace, trace_grid};
+
+/// An axis-aligned rectangle (mm).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Rect {
+    pub x0: f64,
+    pub y0: f64,
+    pub x1: f64,
+    pub y1: f64,
+}
+
+impl Rect {
+    /// A square of half-size `h` about (cx, cy).
+    pub fn square(cx: f64, cy: f64, h: f64) -> Rect {
+        Rect { x0: cx - h, y0: cy - h, x1: cx + h, y1: cy + h }
+    }
+    pub fn width(&self) -> f64 {
+        self.x1 - self.x0
+    }
+    pub fn height(&self) -> f64 {
+        self.y1 - self.y0
+    }
+    pub fn area(&self) -> f64 {
+        self.width().max(0.0) * self.height().max(0.0)
+    }
+    /// True when the rectangle has no area (or is not finite).
+    pub fn is_empty(&self) -> bool {
+        !(self.x1 > self.x0 && self.y1 > self.y0)
+    }
+    /// Grown by `dx`, `dy` on every side.
+    pub fn expand(&self, dx: f64, dy: f64) -> Rect {
+        Rect { x0: self.x0 - dx, y0: self.y0 - dy, x1: self.x1 + dx, y1: self.y1 + dy }
+    }
+    /// The smallest rectangle holding both.
+    pub fn union(&self, o: &Rect) -> Rect {
+        Rect {
+            x0: self.x0.min(o.x0),
+            y0: self.y0.min(o.y0),
+            x1: self.x1.max(o.x1),
+            y1: self.y1.max(o.y1),
+        }
+    }
+    /// The bounding box of `points`, or `None` when there are none.
+    pub fn bounding(points: impl IntoIterator<Item = [f64; 2]>) -> Option<Rect> {
+        let mut r: Option<Rect> = None;
+        for [x, y] in points {
+            let p = Rect { x0: x, y0: y, x1: x, y1: y };
+            r = Some(r.map_or(p, |r| r.union(&p)));
+        }
+        r
+    }
+    /// Rotated by `phi` about the origin: the bounding box of the rotated corners.
+    pub fn rotated(&self, phi: f64) -> Rect {
+        let (s, c) = phi.sin_cos();
+        let corners = [[self.x0, self.y0], [self.x1, self.y0], [self.x0, self.y1], [self.x1, self.y1]];
+        Rect::bounding(corners.map(|[x, y]| [x * c - y * s, x * s + y * c])).unwrap_or_default()
+    }
+}
+
+/// A ghost at one incidence angle.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct GhostBounds {
+    /// Entrance-plane rectangle (meridional frame) whose rays reach the sensor.
+    pub entrance: Rect,
+    /// Where those rays land (meridional frame).
+    pub sensor: Rect,
+    /// Grid vertices per side the ghost needs (from the spread of its triangle areas).
+    pub grid: usize,
+    /// Mean Fresnel/coating throughput of the rays that pass.
+    pub mean_intensity: f64,
+    /// The ghost's flux over the direct image's flux at the same angle.
+    pub energy_share: f64,
+}
+
+/// How bounds are found.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum BoundsMode {
+    Approximate,
+    Precise,
+}
+
+/// Grid sizes the precise mode traces with.
+const SEARCH_GRID: usize = 33;
+const REFINE_GRID: usize = 49;
+/// Grid size range chosen for rendering.
+pub const MIN_GRID: usize = 16;
+pub const MAX_GRID: usize = 128;
+
+/// The square on the entrance plane that holds every ray which can enter the lens at
+/// `theta`: the front element's semi-diameter, widened by how far an oblique ray moves
+/// between the plane z = 0 and the front surface's rim.
+pub fn entrance_search_rect(system: &LensSystem, theta: f64) -> Rect {
+    let s0 = &system.surfaces[0];
+    let sag = s0.sag(s0.semi_diameter).unwrap_or(0.0).abs();
+    let h = s0.semi_diameter * 1.02 + sag * theta.tan().abs();
+    Rect::square(0.0, 0.0, h)
+}
+
+/// The direct image's flux at `theta` for unit irradiance (perpendicular to the beam): the
+/// forward path traced on a fine grid, weights summed over the rays that pass.
+pub fn direct_flux(system: &LensSystem, lambda_nm: f64, theta: f64, scratch: &mut GridTrace) -> f64 {
+    let seq = Sequence::forward(system, lambda_nm).with_interface_tables().cast::<f32>();
+    let stop = stop_opening(system);
+    let rect = entrance_search_rect(system, theta);
+    trace_grid(&seq, theta, rect, 129, stop, scratch);
+    passing_flux(scratch, theta)
+}
+
+/// Σ weight × cell area × cos θ over the passing vertices.
+fn passing_flux(g: &GridTrace, theta: f64) -> f64 {
+    let w: f64 = (0..g.n * g.n).filter(|&k| g.passes(k)).map(|k| g.weight[k] as f64).sum();
+    w * g.cell_area() * theta.cos()
+}
+
+/// Precise bounds of `path` at `theta` (radians) and `lambda_nm`; `None` when no ray of the
+/// ghost reaches the sensor. `direct` is [`direct_flux`] at the same angle.
+pub fn precise(
+    system: &LensSystem,
+    path: GhostPath,
+    lambda_nm: f64,
+    theta: f64,
+    direct: f64,
+    scratch: &mut GridTrace,
+) -> Option<GhostBounds> {
+    let seq = Sequence::ghost(system, lambda_nm, path.first, path.second)
+        .ok()?
+        .with_interface_tables()
+        .cast::<f32>();
+    let stop = stop_opening(system);
+    let mut rect = entrance_search_rect(system, theta);
+    for n in [SEARCH_GRID, REFINE_GRID, REFINE_GRID] {
+        trace_grid(&seq, theta, rect, n, stop, scratch);
+        let g = &*scratch;
+        let found = Rect::bounding((0..n * n).filter(|&k| g.passes(k)).map(|k| {
+            let (i, j) = (k % n, k / n);
+            [
+                g.rect.x0 + g.rect.width() * i as f64 / (n - 1) as f64,
+                g.rect.y0 + g.rect.height() * j as f64 / (n - 1) as f64,
+            ]
+        }))?;
+        // One cell of margin: the true edge lies between a passing and a failing vertex.
+        let (cx, cy) = (g.rect.width() / (n - 1) as f64, g.rect.height() / (n - 1) as f64);
+        rect = found.expand(cx, cy);
+    }
+    trace_grid(&seq, theta, rect, REFINE_GRID, stop, scratch);
+    let g = &*scratch;
+    let n = g.n;
+    let passing: Vec<usize> = (0..n * n).filter(|&k| g.passes(k)).collect();
+    if passing.is_empty() {
+        return None;
+    }
+    let sensor = Rect::bounding(passing.iter().map(|&k| g.sensor[k].map(f64::from)))?;
+    let mean_intensity =
+        passing.iter().map(|&k| g.weight[k] as f64).sum::<f64>() / passing.len() as f64;
+    let flux = passing_flux(g, theta);
+    Some(GhostBounds {
+        entrance: rect,
+        sensor,
+        grid: grid_for_spread(g),
+        mean_intensity,
+        energy_share: if direct > 0.0 { flux / direct } else { 0.0 },
+    })
+}
+
+/// Vertices per side for rendering, from how unevenly the grid's cells land on the sensor: the
+/// ratio of the 90th-percentile to the median cell area. A uniform ghost (ratio 1) gets
+/// `MIN_GRID`; the grid grows with the square root of the ratio (cells shrink in both
+/// directions), up to `MAX_GRID`.
+pub fn grid_for_spread(g: &GridTrace) -> usize {
+    let n = g.n;
+    let mut areas: Vec<f64> = Vec::new();
+    for j in 0..n - 1 {
+        for i in 0..n - 1 {
+            let k = [j * n + i, j * n + i + 1, (j + 1) * n + i + 1, (j + 1) * n + i];
+            if k.iter().all(|&v| g.passes(v)) {
+                let p = k.map(|v| g.sensor[v].map(f64::from));
+                areas.push(quad_area(p));
+            }
+        }
+    }
+    if areas.len() < 4 {
+        return MIN_GRID;
+    }
+    areas.sort_by(f64::total_cmp);
+    let median = areas[areas.len() / 2];
+    let p90 = areas[areas.len() * 9 / 10];
+    let spread = if median > 0.0 { p90 / median } else { MAX_GRID as f64 };
+    ((MIN_GRID as f64 * spread.sqrt()).ceil() as usize).clamp(MIN_GRID, MAX_GRID)
+}
+
+/// |area| of a quadrilateral (shoelace).
+fn quad_area(p: [[f64; 2]; 4]) -> f64 {
+    let mut a = 0.0;
+    for i in 0..4 {
+        let (q, r) = (p[i], p[(i + 1) % 4]);
+        a += q[0] * r[1] - r[0] * q[1];
+    }
+    0.5 * a.abs()
+}
+
+/// Approximate (paraxial) bounds of `path` at `theta`: each aperture met along the path
+/// bounds the entrance height, `|A·y0 + B·tan θ| ≤ s`, and the width, `|A·x0| ≤ s`.
+/// Energies are not traced here: `energy_share` is the product of the normal-incidence
+/// factors along the path times the ratio of entrance areas.
+pub fn approximate(
+    system: &LensSystem,
+    path: GhostPath,
+    lambda_nm: f64,
+    theta: f64,
+) -> Option<GhostBounds> {
+    let seq = Sequence::ghost(system, lambda_nm, path.first, path.second)
+        .ok()?
+        .with_interface_tables();
+    let u = theta.tan();
+    // y = a·y0 + b·u and n·u' = c·y0 + d·u, with the index signed by the travel direction.
+    let (mut a, mut b, mut c, mut d) = (1.0, 0.0, 0.0, 1.0);
+    let mut n_signed = 1.0;
+    let mut z_prev = 0.0;
+    let (mut ylo, mut yhi) = (f64::NEG_INFINITY, f64::INFINITY);
+    let mut xhalf = f64::INFINITY;
+    let mut factor = 1.0;
+    let (mut a_s, mut b_s) = (1.0, 0.0);
+    for s in &seq.steps {
+        let t = s.z - z_prev;
+        a += t * c / n_signed;
+        b += t * d / n_signed;
+        z_prev = s.z;
+        if s.inv_semi2 > 0.0 {
+            let semi = s.semi;
+            if a.abs() > 1e-12 {
+                let (lo, hi) = ((-semi - b * u) / a, (semi - b * u) / a);
+                ylo = ylo.max(lo.min(hi));
+                yhi = yhi.min(lo.max(hi));
+                xhalf = xhalf.min(semi / a.abs());
+            } else if (b * u).abs() > semi {
+                return None;
+            }
+        }
+        if let Some(t) = s.table {
+            factor *= seq.tables[t as usize].values[crate::trace::TABLE_LEN - 1];
+        }
+        let sign = if n_signed > 0.0 { 1.0 } else { -1.0 };
+        let n_to = match s.interaction {
+            Interaction::Refract => sign * s.n_to,
+            Interaction::Reflect => -n_signed,
+            Interaction::Sensor => {
+                (a_s, b_s) = (a, b);
+                n_signed
+            }
+        };
+        let power = s.c * (n_to - n_signed);
+        c -= power * a;
+        d -= power * b;
+        n_signed = n_to;
+    }
+    if !(yhi > ylo && xhalf > 0.0 && xhalf.is_finite()) {
+        return None;
+    }
+    let entrance = Rect { x0: -xhalf, y0: ylo, x1: xhalf, y1: yhi };
+    let ys = [a_s * ylo + b_s * u, a_s * yhi + b_s * u];
+    let xs = a_s.abs() * xhalf;
+    let sensor = Rect { x0: -xs, y0: ys[0].min(ys[1]), x1: xs, y1: ys[0].max(ys[1]) };
+    let pupil_area = {
+        // The direct image's entrance pupil area at the d line, paraxially.
+        let p = crate::paraxial::analyse(system, lambda_nm).ok()?;
+        std::f64::consts::PI * (p.entrance_pupil_diameter_mm / 2.0).powi(2)
+    };
+    Some(GhostBounds {
+        entrance,
+        sensor,
+        grid: 32,
+        mean_intensity: factor,
+        energy_share: factor * (std::f64::consts::FRAC_PI_4 * entrance.area()) / pupil_area,
+    })
+}

@@ -1,0 +1,15 @@
+//! Ghosts (Hullin et al. 2011): light reflected twice inside the lens, traced as sparse ray
+//! grids from the entrance plane to the sensor.
+//!
+//! - [`enumerate`]: every two-reflection path.
+//! - [`grid`]: a grid of parallel rays traced along one ghost path at one wavelength.
+//! - [`bounds`]: where on the entrance plane the rays that reach the sensor start, per ghost
+//!   and incidence angle (approximate paraxial and precise traced modes).
+
+pub mod bounds;
+pub mod enumerate;
+pub mod grid;
+
+pub use bounds::{GhostBounds, Rect};
+pub use enumerate::{GhostPath, enumerate_ghosts, reflecting_surfaces};
+pub use grid::{GridTrace, trace_grid};

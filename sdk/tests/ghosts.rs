@@ -1,0 +1,109 @@
+//! Ghost enumeration, batched ghost throughput and ghost bounds.
+
+use std::path::Path;
+
+use flarebench_sdk::ghost::bounds::{self, BoundsMode};
+use flarebench_sdk::ghost::{GhostPath, GridTrace, enumerate_ghosts, reflecting_surfaces, trace_grid};
+use flarebench_sdk::io::read_lens;
+use flarebench_sdk::paraxial::stop_opening;
+use flarebench_sdk::trace::{Ray, RayBatch, Sequence};
+use flarebench_sdk::LensSystem;
+
+fn lens(stem: &str) -> LensSystem {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../lenses/{stem}.xml"));
+    read_lens(&p).unwrap().system
+}
+
+#[test]
+fn every_pair_of_reflecting_surfaces_is_a_ghost() {
+    let heliar = lens("heliar-tronnier");
+    // 8 glass–air or glass–glass interfaces (the stop and the sensor do not reflect).
+    assert_eq!(reflecting_surfaces(&heliar), vec![0, 1, 2, 3, 4, 6, 7, 8]);
+    let g = enumerate_ghosts(&heliar);
+    assert_eq!(g.len(), 8 * 7 / 2);
+    assert!(g.iter().all(|p| p.first > p.second));
+    // Paths with reflections on both sides of the stop (surface 5) are included.
+    assert!(g.contains(&GhostPath { first: 7, second: 2 }));
+    let nikon = lens("nikon-zoom-short");
+    let n = reflecting_surfaces(&nikon).len();
+    assert_eq!(enumerate_ghosts(&nikon).len(), n * (n - 1) / 2);
+}
+
+#[test]
+fn batched_ghost_weights_match_the_scalar_throughput() {
+    let sys = lens("heliar-tronnier");
+    for (first, second) in [(8, 7), (4, 1), (7, 2)] {
+        let seq = Sequence::ghost(&sys, 520.0, first, second).unwrap();
+        let tabled = seq.clone().with_interface_tables();
+        let mut b = RayBatch::<f64>::with_capacity(64);
+        let rays: Vec<Ray> = (0..40).map(|i| Ray::collimated(0.05, 0.0, -3.0 + 0.15 * i as f64)).collect();
+        for r in &rays {
+            b.push(r.origin.to_array(), r.dir.to_array());
+        }
+        tabled.trace_batch(&mut b);
+        let mut checked = 0;
+        for (i, r) in rays.iter().enumerate() {
+            let s = seq.trace(r);
+            if !s.completed {
+                continue;
+            }
+            let w = b.packets()[i / 64].weight[i % 64];
+            // Tables are interpolated linearly in cos θ over 256 entries.
+            assert!((w - s.throughput).abs() <= 1e-6 + 1e-4 * s.throughput, "{first}-{second} ray {i}: {w} vs {}", s.throughput);
+            checked += 1;
+        }
+        assert!(checked > 10);
+    }
+}
+
+#[test]
+fn precise_bounds_hold_every_passing_ray_and_are_symmetric_on_axis() {
+    let sys = lens("heliar-tronnier");
+    let mut scratch = GridTrace::default();
+    let direct = bounds::direct_flux(&sys, 550.0, 0.0, &mut scratch);
+    assert!(direct > 0.0);
+    let path = GhostPath { first: 4, second: 3 };
+    let b = bounds::precise(&sys, path, 550.0, 0.0, direct, &mut scratch).expect("ghost 4-3 reaches the sensor");
+    let e = b.entrance;
+    assert!((e.x0 + e.x1).abs() < 0.05 * e.width(), "{e:?}");
+    assert!((e.y0 + e.y1).abs() < 0.05 * e.height(), "{e:?}");
+    assert!(b.energy_share > 0.0 && b.energy_share < 0.05, "{}", b.energy_share);
+    // A dense grid over the whole front finds no passing ray outside the bounds.
+    let seq = Sequence::ghost(&sys, 550.0, 4, 3).unwrap().cast::<f32>();
+    let wide = bounds::entrance_search_rect(&sys, 0.0);
+    let mut g = GridTrace::default();
+    trace_grid(&seq, 0.0, wide, 161, stop_opening(&sys), &mut g);
+    for k in 0..g.n * g.n {
+        if g.passes(k) {
+            let (i, j) = (k % g.n, k / g.n);
+            let x = wide.x0 + wide.width() * i as f64 / 160.0;
+            let y = wide.y0 + wide.height() * j as f64 / 160.0;
+            assert!(x >= e.x0 && x <= e.x1 && y >= e.y0 && y <= e.y1, "({x}, {y}) outside {e:?}");
+        }
+    }
+}
+
+#[test]
+fn approximate_bounds_are_close_to_precise_ones_near_the_axis() {
+    let sys = lens("heliar-tronnier");
+    let mut scratch = GridTrace::default();
+    let theta = 2f64.to_radians();
+    let direct = bounds::direct_flux(&sys, 550.0, theta, &mut scratch);
+    let mut compared = 0;
+    for path in enumerate_ghosts(&sys) {
+        let (Some(p), Some(a)) = (
+            bounds::precise(&sys, path, 550.0, theta, direct, &mut scratch),
+            bounds::approximate(&sys, path, 550.0, theta),
+        ) else {
+            continue;
+        };
+        // The traced rectangle has one grid cell of margin; paraxial optics ignores aberration.
+        let tol = 0.25 * p.entrance.width().max(p.entrance.height());
+        for (x, y) in [(p.entrance.x0, a.entrance.x0), (p.entrance.x1, a.entrance.x1), (p.entrance.y0, a.entrance.y0), (p.entrance.y1, a.entrance.y1)] {
+            assert!((x - y).abs() < tol, "{path}: precise {:?} vs approximate {:?}", p.entrance, a.entrance);
+        }
+        compared += 1;
+    }
+    assert!(compared > 10, "only {compared} ghosts compared");
+    let _ = BoundsMode::Precise;
+}
