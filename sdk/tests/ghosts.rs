@@ -2,12 +2,14 @@
 
 use std::path::Path;
 
+use flarebench_sdk::LensSystem;
 use flarebench_sdk::ghost::bounds::{self, BoundsMode};
-use flarebench_sdk::ghost::{GhostPath, GridTrace, enumerate_ghosts, reflecting_surfaces, trace_grid};
+use flarebench_sdk::ghost::{
+    GhostPath, GridTrace, enumerate_ghosts, reflecting_surfaces, trace_grid,
+};
 use flarebench_sdk::io::read_lens;
 use flarebench_sdk::paraxial::stop_opening;
 use flarebench_sdk::trace::{Ray, RayBatch, Sequence};
-use flarebench_sdk::LensSystem;
 
 fn lens(stem: &str) -> LensSystem {
     let p = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../lenses/{stem}.xml"));
@@ -23,7 +25,10 @@ fn every_pair_of_reflecting_surfaces_is_a_ghost() {
     assert_eq!(g.len(), 8 * 7 / 2);
     assert!(g.iter().all(|p| p.first > p.second));
     // Paths with reflections on both sides of the stop (surface 5) are included.
-    assert!(g.contains(&GhostPath { first: 7, second: 2 }));
+    assert!(g.contains(&GhostPath {
+        first: 7,
+        second: 2
+    }));
     let nikon = lens("nikon-zoom-short");
     let n = reflecting_surfaces(&nikon).len();
     assert_eq!(enumerate_ghosts(&nikon).len(), n * (n - 1) / 2);
@@ -36,7 +41,9 @@ fn batched_ghost_weights_match_the_scalar_throughput() {
         let seq = Sequence::ghost(&sys, 520.0, first, second).unwrap();
         let tabled = seq.clone().with_interface_tables();
         let mut b = RayBatch::<f64>::with_capacity(64);
-        let rays: Vec<Ray> = (0..40).map(|i| Ray::collimated(0.05, 0.0, -3.0 + 0.15 * i as f64)).collect();
+        let rays: Vec<Ray> = (0..40)
+            .map(|i| Ray::collimated(0.05, 0.0, -3.0 + 0.15 * i as f64))
+            .collect();
         for r in &rays {
             b.push(r.origin.to_array(), r.dir.to_array());
         }
@@ -49,7 +56,11 @@ fn batched_ghost_weights_match_the_scalar_throughput() {
             }
             let w = b.packets()[i / 64].weight[i % 64];
             // Tables are interpolated linearly in cos θ over 256 entries.
-            assert!((w - s.throughput).abs() <= 1e-6 + 1e-4 * s.throughput, "{first}-{second} ray {i}: {w} vs {}", s.throughput);
+            assert!(
+                (w - s.throughput).abs() <= 1e-6 + 1e-4 * s.throughput,
+                "{first}-{second} ray {i}: {w} vs {}",
+                s.throughput
+            );
             checked += 1;
         }
         assert!(checked > 10);
@@ -62,12 +73,20 @@ fn precise_bounds_hold_every_passing_ray_and_are_symmetric_on_axis() {
     let mut scratch = GridTrace::default();
     let direct = bounds::direct_flux(&sys, 550.0, 0.0, &mut scratch);
     assert!(direct > 0.0);
-    let path = GhostPath { first: 4, second: 3 };
-    let b = bounds::precise(&sys, path, 550.0, 0.0, direct, &mut scratch).expect("ghost 4-3 reaches the sensor");
+    let path = GhostPath {
+        first: 4,
+        second: 3,
+    };
+    let b = bounds::precise(&sys, path, 550.0, 0.0, direct, &mut scratch)
+        .expect("ghost 4-3 reaches the sensor");
     let e = b.entrance;
     assert!((e.x0 + e.x1).abs() < 0.05 * e.width(), "{e:?}");
     assert!((e.y0 + e.y1).abs() < 0.05 * e.height(), "{e:?}");
-    assert!(b.energy_share > 0.0 && b.energy_share < 0.05, "{}", b.energy_share);
+    assert!(
+        b.energy_share > 0.0 && b.energy_share < 0.05,
+        "{}",
+        b.energy_share
+    );
     // A dense grid over the whole front finds no passing ray outside the bounds.
     let seq = Sequence::ghost(&sys, 550.0, 4, 3).unwrap().cast::<f32>();
     let wide = bounds::entrance_search_rect(&sys, 0.0);
@@ -78,7 +97,10 @@ fn precise_bounds_hold_every_passing_ray_and_are_symmetric_on_axis() {
             let (i, j) = (k % g.n, k / g.n);
             let x = wide.x0 + wide.width() * i as f64 / 160.0;
             let y = wide.y0 + wide.height() * j as f64 / 160.0;
-            assert!(x >= e.x0 && x <= e.x1 && y >= e.y0 && y <= e.y1, "({x}, {y}) outside {e:?}");
+            assert!(
+                x >= e.x0 && x <= e.x1 && y >= e.y0 && y <= e.y1,
+                "({x}, {y}) outside {e:?}"
+            );
         }
     }
 }
@@ -99,8 +121,18 @@ fn approximate_bounds_are_close_to_precise_ones_near_the_axis() {
         };
         // The traced rectangle has one grid cell of margin; paraxial optics ignores aberration.
         let tol = 0.25 * p.entrance.width().max(p.entrance.height());
-        for (x, y) in [(p.entrance.x0, a.entrance.x0), (p.entrance.x1, a.entrance.x1), (p.entrance.y0, a.entrance.y0), (p.entrance.y1, a.entrance.y1)] {
-            assert!((x - y).abs() < tol, "{path}: precise {:?} vs approximate {:?}", p.entrance, a.entrance);
+        for (x, y) in [
+            (p.entrance.x0, a.entrance.x0),
+            (p.entrance.x1, a.entrance.x1),
+            (p.entrance.y0, a.entrance.y0),
+            (p.entrance.y1, a.entrance.y1),
+        ] {
+            assert!(
+                (x - y).abs() < tol,
+                "{path}: precise {:?} vs approximate {:?}",
+                p.entrance,
+                a.entrance
+            );
         }
         compared += 1;
     }

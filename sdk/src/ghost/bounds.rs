@@ -33,7 +33,12 @@ pub struct Rect {
 impl Rect {
     /// A square of half-size `h` about (cx, cy).
     pub fn square(cx: f64, cy: f64, h: f64) -> Rect {
-        Rect { x0: cx - h, y0: cy - h, x1: cx + h, y1: cy + h }
+        Rect {
+            x0: cx - h,
+            y0: cy - h,
+            x1: cx + h,
+            y1: cy + h,
+        }
     }
     pub fn width(&self) -> f64 {
         self.x1 - self.x0
@@ -50,7 +55,12 @@ impl Rect {
     }
     /// Grown by `dx`, `dy` on every side.
     pub fn expand(&self, dx: f64, dy: f64) -> Rect {
-        Rect { x0: self.x0 - dx, y0: self.y0 - dy, x1: self.x1 + dx, y1: self.y1 + dy }
+        Rect {
+            x0: self.x0 - dx,
+            y0: self.y0 - dy,
+            x1: self.x1 + dx,
+            y1: self.y1 + dy,
+        }
     }
     /// The smallest rectangle holding both.
     pub fn union(&self, o: &Rect) -> Rect {
@@ -65,7 +75,12 @@ impl Rect {
     pub fn bounding(points: impl IntoIterator<Item = [f64; 2]>) -> Option<Rect> {
         let mut r: Option<Rect> = None;
         for [x, y] in points {
-            let p = Rect { x0: x, y0: y, x1: x, y1: y };
+            let p = Rect {
+                x0: x,
+                y0: y,
+                x1: x,
+                y1: y,
+            };
             r = Some(r.map_or(p, |r| r.union(&p)));
         }
         r
@@ -73,7 +88,12 @@ impl Rect {
     /// Rotated by `phi` about the origin: the bounding box of the rotated corners.
     pub fn rotated(&self, phi: f64) -> Rect {
         let (s, c) = phi.sin_cos();
-        let corners = [[self.x0, self.y0], [self.x1, self.y0], [self.x0, self.y1], [self.x1, self.y1]];
+        let corners = [
+            [self.x0, self.y0],
+            [self.x1, self.y0],
+            [self.x0, self.y1],
+            [self.x1, self.y1],
+        ];
         Rect::bounding(corners.map(|[x, y]| [x * c - y * s, x * s + y * c])).unwrap_or_default()
     }
 }
@@ -120,8 +140,15 @@ pub fn entrance_search_rect(system: &LensSystem, theta: f64) -> Rect {
 
 /// The direct image's flux at `theta` for unit irradiance (perpendicular to the beam): the
 /// forward path traced on a fine grid, weights summed over the rays that pass.
-pub fn direct_flux(system: &LensSystem, lambda_nm: f64, theta: f64, scratch: &mut GridTrace) -> f64 {
-    let seq = Sequence::forward(system, lambda_nm).with_interface_tables().cast::<f32>();
+pub fn direct_flux(
+    system: &LensSystem,
+    lambda_nm: f64,
+    theta: f64,
+    scratch: &mut GridTrace,
+) -> f64 {
+    let seq = Sequence::forward(system, lambda_nm)
+        .with_interface_tables()
+        .cast::<f32>();
     let stop = stop_opening(system);
     let rect = entrance_search_rect(system, theta);
     trace_grid(&seq, theta, rect, 129, stop, scratch);
@@ -130,7 +157,10 @@ pub fn direct_flux(system: &LensSystem, lambda_nm: f64, theta: f64, scratch: &mu
 
 /// Σ weight × cell area × cos θ over the passing vertices.
 fn passing_flux(g: &GridTrace, theta: f64) -> f64 {
-    let w: f64 = (0..g.n * g.n).filter(|&k| g.passes(k)).map(|k| g.weight[k] as f64).sum();
+    let w: f64 = (0..g.n * g.n)
+        .filter(|&k| g.passes(k))
+        .map(|k| g.weight[k] as f64)
+        .sum();
     w * g.cell_area() * theta.cos()
 }
 
@@ -161,7 +191,10 @@ pub fn precise(
             ]
         }))?;
         // One cell of margin: the true edge lies between a passing and a failing vertex.
-        let (cx, cy) = (g.rect.width() / (n - 1) as f64, g.rect.height() / (n - 1) as f64);
+        let (cx, cy) = (
+            g.rect.width() / (n - 1) as f64,
+            g.rect.height() / (n - 1) as f64,
+        );
         rect = found.expand(cx, cy);
     }
     trace_grid(&seq, theta, rect, REFINE_GRID, stop, scratch);
@@ -193,7 +226,12 @@ pub fn grid_for_spread(g: &GridTrace) -> usize {
     let mut areas: Vec<f64> = Vec::new();
     for j in 0..n - 1 {
         for i in 0..n - 1 {
-            let k = [j * n + i, j * n + i + 1, (j + 1) * n + i + 1, (j + 1) * n + i];
+            let k = [
+                j * n + i,
+                j * n + i + 1,
+                (j + 1) * n + i + 1,
+                (j + 1) * n + i,
+            ];
             if k.iter().all(|&v| g.passes(v)) {
                 let p = k.map(|v| g.sensor[v].map(f64::from));
                 areas.push(quad_area(p));
@@ -206,7 +244,11 @@ pub fn grid_for_spread(g: &GridTrace) -> usize {
     areas.sort_by(f64::total_cmp);
     let median = areas[areas.len() / 2];
     let p90 = areas[areas.len() * 9 / 10];
-    let spread = if median > 0.0 { p90 / median } else { MAX_GRID as f64 };
+    let spread = if median > 0.0 {
+        p90 / median
+    } else {
+        MAX_GRID as f64
+    };
     ((MIN_GRID as f64 * spread.sqrt()).ceil() as usize).clamp(MIN_GRID, MAX_GRID)
 }
 
@@ -278,10 +320,20 @@ pub fn approximate(
     if !(yhi > ylo && xhalf > 0.0 && xhalf.is_finite()) {
         return None;
     }
-    let entrance = Rect { x0: -xhalf, y0: ylo, x1: xhalf, y1: yhi };
+    let entrance = Rect {
+        x0: -xhalf,
+        y0: ylo,
+        x1: xhalf,
+        y1: yhi,
+    };
     let ys = [a_s * ylo + b_s * u, a_s * yhi + b_s * u];
     let xs = a_s.abs() * xhalf;
-    let sensor = Rect { x0: -xs, y0: ys[0].min(ys[1]), x1: xs, y1: ys[0].max(ys[1]) };
+    let sensor = Rect {
+        x0: -xs,
+        y0: ys[0].min(ys[1]),
+        x1: xs,
+        y1: ys[0].max(ys[1]),
+    };
     let pupil_area = {
         // The direct image's entrance pupil area at the d line, paraxially.
         let p = crate::paraxial::analyse(system, lambda_nm).ok()?;

@@ -77,7 +77,8 @@ pub fn trace_grid(
         let lanes = LANES.min(total - pi * LANES);
         for l in 0..lanes {
             out.sensor.push([p.x[l], p.y[l]]);
-            out.stop_uv.push([p.stop_x[l] * inv_stop, p.stop_y[l] * inv_stop]);
+            out.stop_uv
+                .push([p.stop_x[l] * inv_stop, p.stop_y[l] * inv_stop]);
             out.max_rel.push(p.max_rel2[l].sqrt());
             out.weight.push(p.weight[l]);
             out.completed.push(p.completed(l));

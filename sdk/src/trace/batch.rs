@@ -164,7 +164,11 @@ impl<T: Real> Sequence<T> {
 /// The packet kernel, compiled for the baseline CPU and for AVX2 + FMA, chosen at run time.
 /// (Products and sums are not contracted into FMAs, so every version gives the same bits.)
 #[multiversion::multiversion(targets("x86_64+avx2+fma"))]
-fn trace_packet_dispatch<T: Real>(steps: &[Step<T>], tables: &[InterfaceTable<T>], p: &mut Packet<T>) {
+fn trace_packet_dispatch<T: Real>(
+    steps: &[Step<T>],
+    tables: &[InterfaceTable<T>],
+    p: &mut Packet<T>,
+) {
     for s in steps {
         match s.table.map(|t| &tables[t as usize]) {
             Some(t) => dispatch_step!(s, step_packet_weighted, s, t, p),

@@ -244,7 +244,11 @@ impl Sequence<f64> {
             for (j, v) in values.iter_mut().enumerate() {
                 let cos = j as f64 / (TABLE_LEN - 1) as f64;
                 let r = coating.reflectance(s.n_from, s.n_to, cos, self.lambda_nm, s.forward);
-                *v = if s.interaction == Interaction::Reflect { r } else { 1.0 - r };
+                *v = if s.interaction == Interaction::Reflect {
+                    r
+                } else {
+                    1.0 - r
+                };
             }
             self.steps[i].table = Some(self.tables.len() as u32);
             self.tables.push(InterfaceTable { values });
@@ -281,7 +285,9 @@ impl Sequence<f64> {
             tables: self
                 .tables
                 .iter()
-                .map(|t| InterfaceTable { values: t.values.map(U::of) })
+                .map(|t| InterfaceTable {
+                    values: t.values.map(U::of),
+                })
                 .collect(),
         }
     }
