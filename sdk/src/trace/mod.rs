@@ -22,4 +22,6 @@ pub use batch::{LANES, Packet, RayBatch};
 pub use fate::Fate;
 pub use real::Real;
 pub use scalar::{Hit, Ray, TraceResult};
-pub use sequence::{Interaction, InterfaceTable, PathError, Sequence, Step, TABLE_LEN};
+pub use sequence::{
+    Interaction, InterfaceTable, InterfaceTableSet, PathError, Sequence, Step, TABLE_LEN,
+};

@@ -83,6 +83,83 @@ pub enum PathError {
     OutOfRange(usize),
 }
 
+/// Every interface's Fresnel/coating tables at one wavelength: for each surface that is a real
+/// boundary, the transmittance and reflectance for light arriving from either side.
+#[derive(Clone, Debug)]
+pub struct InterfaceTableSet {
+    pub lambda_nm: f64,
+    /// Indexed by surface: `[forward T, forward R, backward T, backward R]`, `None` where the
+    /// surface is not a boundary (no index step, no coating).
+    tables: Vec<Option<Box<[InterfaceTable<f64>; 4]>>>,
+}
+
+impl InterfaceTableSet {
+    /// The tables of `system` at `lambda_nm`.
+    pub fn for_system(system: &LensSystem, lambda_nm: f64) -> Self {
+        let seq = Sequence::forward(system, lambda_nm);
+        Self::new(&seq.coatings, &seq.steps, lambda_nm)
+    }
+
+    fn new(coatings: &[Coating], steps: &[Step<f64>], lambda_nm: f64) -> Self {
+        let mut tables: Vec<Option<Box<[InterfaceTable<f64>; 4]>>> = vec![None; coatings.len()];
+        for s in steps {
+            if tables[s.surface].is_some() || s.interaction == Interaction::Sensor {
+                continue;
+            }
+            let coating = &coatings[s.surface];
+            if s.n_from == s.n_to && *coating == Coating::None {
+                continue;
+            }
+            // Indices on the object side and the sensor side of the surface.
+            let (n_before, n_after) = if s.forward {
+                (s.n_from, s.n_to)
+            } else {
+                (s.n_to, s.n_from)
+            };
+            let table = |forward: bool, reflect: bool| {
+                let (n1, n2) = if forward {
+                    (n_before, n_after)
+                } else {
+                    (n_after, n_before)
+                };
+                let mut values = [0.0; TABLE_LEN];
+                for (j, v) in values.iter_mut().enumerate() {
+                    let cos = j as f64 / (TABLE_LEN - 1) as f64;
+                    let r = coating.reflectance(n1, n2, cos, lambda_nm, forward);
+                    *v = if reflect { r } else { 1.0 - r };
+                }
+                InterfaceTable { values }
+            };
+            tables[s.surface] = Some(Box::new([
+                table(true, false),
+                table(true, true),
+                table(false, false),
+                table(false, true),
+            ]));
+        }
+        InterfaceTableSet { lambda_nm, tables }
+    }
+
+    /// The table for light meeting `surface` travelling `forward` (toward the sensor) and
+    /// doing `interaction`.
+    pub fn get(
+        &self,
+        surface: usize,
+        forward: bool,
+        interaction: Interaction,
+    ) -> Option<&InterfaceTable<f64>> {
+        let set = self.tables.get(surface)?.as_ref()?;
+        let k = match (forward, interaction) {
+            (_, Interaction::Sensor) => return None,
+            (true, Interaction::Refract) => 0,
+            (true, Interaction::Reflect) => 1,
+            (false, Interaction::Refract) => 2,
+            (false, Interaction::Reflect) => 3,
+        };
+        Some(&set[k])
+    }
+}
+
 /// The interactions a ray goes through for one wavelength.
 #[derive(Clone, Debug)]
 pub struct Sequence<T> {
@@ -230,28 +307,21 @@ impl Sequence<f64> {
 
     /// Builds the Fresnel/coating factor table of every step that changes a ray's weight
     /// (a refraction or reflection at a real boundary), so batches track the throughput.
-    pub fn with_interface_tables(mut self) -> Self {
+    pub fn with_interface_tables(self) -> Self {
+        let set = InterfaceTableSet::new(&self.coatings, &self.steps, self.lambda_nm);
+        self.with_tables_from(&set)
+    }
+
+    /// Like [`Self::with_interface_tables`], copying the tables from a set built once per lens
+    /// and wavelength (many ghost paths share the same interfaces).
+    pub fn with_tables_from(mut self, set: &InterfaceTableSet) -> Self {
         self.tables.clear();
         for i in 0..self.steps.len() {
             let s = self.steps[i];
-            let coating = &self.coatings[s.surface];
-            let boundary = s.n_from != s.n_to || *coating != Coating::None;
-            if !boundary || s.interaction == Interaction::Sensor {
-                self.steps[i].table = None;
-                continue;
-            }
-            let mut values = [0.0; TABLE_LEN];
-            for (j, v) in values.iter_mut().enumerate() {
-                let cos = j as f64 / (TABLE_LEN - 1) as f64;
-                let r = coating.reflectance(s.n_from, s.n_to, cos, self.lambda_nm, s.forward);
-                *v = if s.interaction == Interaction::Reflect {
-                    r
-                } else {
-                    1.0 - r
-                };
-            }
-            self.steps[i].table = Some(self.tables.len() as u32);
-            self.tables.push(InterfaceTable { values });
+            self.steps[i].table = set.get(s.surface, s.forward, s.interaction).map(|t| {
+                self.tables.push(t.clone());
+                (self.tables.len() - 1) as u32
+            });
         }
         self
     }
