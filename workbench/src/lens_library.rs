@@ -3,7 +3,8 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
-use flarebench_sdk::io::{LoadedLens, read_lens};
+use clap::{Args, ValueEnum};
+use flarebench_sdk::io::{LoadedLens, PbrtConvention, ReadOptions, read_lens_with};
 
 /// Extensions tried when a bundled lens is named without one.
 const EXTENSIONS: &[&str] = &["xml", "zmx", "dat"];
@@ -75,10 +76,52 @@ pub fn bundled_names() -> Vec<String> {
     names
 }
 
-/// Resolves and loads a lens; warnings are printed to stderr unless `quiet`.
+/// How to read lens files that leave a choice open: shared by every command that loads a lens
+/// (flattened into its arguments).
+#[derive(Clone, Debug, Default, Args)]
+pub struct ReadArgs {
+    /// Zemax multi-configuration (zoom or focus position) to read, 1-based; default: the one
+    /// active when the file was saved.
+    #[arg(long = "config", value_name = "N")]
+    pub config: Option<usize>,
+    /// What column 2 of a PBRT `.dat` table means; default: detected from the zeros in its
+    /// first and last rows.
+    #[arg(long, value_enum, value_name = "CONVENTION")]
+    pub pbrt_convention: Option<PbrtConventionArg>,
+}
+
+/// `--pbrt-convention` values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum PbrtConventionArg {
+    /// pbrt's own: the thickness after each surface (last row: film distance, 0 = focus).
+    ThicknessAfter,
+    /// The separation before each surface (first row 0), as in Modern Lens Design tables.
+    SeparationBefore,
+}
+
+impl ReadArgs {
+    /// The reader options these arguments ask for.
+    pub fn options(&self) -> ReadOptions {
+        ReadOptions {
+            zemax_config: self.config,
+            pbrt_convention: self.pbrt_convention.map(|c| match c {
+                PbrtConventionArg::ThicknessAfter => PbrtConvention::ThicknessAfter,
+                PbrtConventionArg::SeparationBefore => PbrtConvention::SeparationBefore,
+            }),
+        }
+    }
+}
+
+/// Resolves and loads a lens with the default reader options; see [`load_with`].
 pub fn load(spec: &str, quiet: bool) -> anyhow::Result<LoadedLens> {
+    load_with(spec, quiet, &ReadOptions::default())
+}
+
+/// Resolves and loads a lens (OpenLensFlare/flarebench XML, Zemax `.zmx`, PBRT `.dat`);
+/// warnings are printed to stderr unless `quiet`.
+pub fn load_with(spec: &str, quiet: bool, options: &ReadOptions) -> anyhow::Result<LoadedLens> {
     let path = resolve(spec)?;
-    let loaded = read_lens(&path)
+    let loaded = read_lens_with(&path, options)
         .map_err(anyhow::Error::new)
         .with_context(|| format!("could not load lens `{spec}`"))?;
     if !quiet {

@@ -2,21 +2,24 @@
 
 use clap::Args;
 use flarebench_sdk::paraxial::{ParaxialData, analyse};
-use flarebench_sdk::spectrum::LAMBDA_D_NM;
 use flarebench_sdk::{Coating, LensSystem};
 use serde::Serialize;
 
 use super::{fmt_len, wavelength};
-use crate::lens_library;
+use crate::lens_library::{self, ReadArgs};
 use crate::table::Table;
 
 #[derive(Debug, Args)]
 pub struct InfoArgs {
-    /// Lens file (OpenLensFlare/flarebench XML) or the name of a bundled lens.
+    /// Lens file (OpenLensFlare/flarebench `.xml`, Zemax `.zmx`, PBRT `.dat`) or the name of a
+    /// bundled lens.
     pub lens: String,
-    /// Wavelength for indices and paraxial data (nm).
-    #[arg(long, default_value_t = LAMBDA_D_NM)]
-    pub wavelength_nm: f64,
+    /// Wavelength for indices and paraxial data (nm); default: the lens's primary wavelength
+    /// (Zemax PWAV), else the d line, 587.5618 nm.
+    #[arg(long)]
+    pub wavelength_nm: Option<f64>,
+    #[command(flatten)]
+    pub read: ReadArgs,
     /// Print one JSON object instead of tables.
     #[arg(long)]
     pub json: bool,
@@ -46,6 +49,7 @@ struct InfoJson<'a> {
     file: String,
     stated_efl_mm: Option<f64>,
     stated_f_number: Option<f64>,
+    primary_wavelength_nm: Option<f64>,
     film_width_mm: f64,
     film_height_mm: f64,
     #[serde(flatten)]
@@ -89,10 +93,17 @@ fn rows(sys: &LensSystem, lambda: f64) -> Vec<SurfaceRow> {
 }
 
 pub fn run(args: &InfoArgs, quiet: bool) -> anyhow::Result<()> {
-    let lambda = wavelength(args.wavelength_nm)?;
+    if let Some(nm) = args.wavelength_nm {
+        wavelength(nm)?;
+    }
     let path = lens_library::resolve(&args.lens)?;
-    let loaded = lens_library::load(&path.to_string_lossy(), quiet || args.json)?;
+    let loaded = lens_library::load_with(
+        &path.to_string_lossy(),
+        quiet || args.json,
+        &args.read.options(),
+    )?;
     let sys = &loaded.system;
+    let lambda = wavelength(args.wavelength_nm.unwrap_or(sys.default_wavelength_nm()))?;
     let p = analyse(sys, lambda)?;
     let surfaces = rows(sys, lambda);
     if args.json {
@@ -101,6 +112,7 @@ pub fn run(args: &InfoArgs, quiet: bool) -> anyhow::Result<()> {
             file: path.display().to_string(),
             stated_efl_mm: sys.stated_efl_mm,
             stated_f_number: sys.f_number,
+            primary_wavelength_nm: sys.primary_wavelength_nm,
             film_width_mm: sys.film_width_mm,
             film_height_mm: sys.film_height_mm,
             paraxial: p,

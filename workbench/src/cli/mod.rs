@@ -1,5 +1,6 @@
 //! Command-line interface: argument parsing and dispatch.
 
+mod convert;
 mod info;
 mod trace;
 
@@ -24,6 +25,8 @@ pub enum Command {
     Info(info::InfoArgs),
     /// Trace one collimated ray through a lens and show every surface it meets.
     Trace(trace::TraceArgs),
+    /// Read a lens file (.xml, Zemax .zmx, PBRT .dat) and write it as flarebench XML.
+    Convert(convert::ConvertArgs),
 }
 
 /// Runs the command line; errors are printed with their causes.
@@ -32,6 +35,7 @@ pub fn main() -> ExitCode {
     let result = match &cli.command {
         Command::Info(a) => info::run(a, cli.quiet),
         Command::Trace(a) => trace::run(a, cli.quiet),
+        Command::Convert(a) => convert::run(a, cli.quiet),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,17 +1,17 @@
 //! `flarebench trace`: one collimated ray through a lens, surface by surface.
 
 use clap::Args;
-use flarebench_sdk::spectrum::LAMBDA_D_NM;
 use flarebench_sdk::trace::{Fate, Hit, Interaction, Ray, Sequence};
 use serde::Serialize;
 
 use super::wavelength;
-use crate::lens_library;
+use crate::lens_library::{self, ReadArgs};
 use crate::table::Table;
 
 #[derive(Debug, Args)]
 pub struct TraceArgs {
-    /// Lens file (OpenLensFlare/flarebench XML) or the name of a bundled lens.
+    /// Lens file (OpenLensFlare/flarebench `.xml`, Zemax `.zmx`, PBRT `.dat`) or the name of a
+    /// bundled lens.
     pub lens: String,
     /// Angle of the ray to the optical axis (degrees), in the y–z plane before rotation.
     #[arg(long, allow_negative_numbers = true)]
@@ -22,12 +22,15 @@ pub struct TraceArgs {
     /// Rotation of the ray's plane about the axis (degrees).
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     pub azimuth_deg: f64,
-    /// Wavelength (nm).
-    #[arg(long, default_value_t = LAMBDA_D_NM)]
-    pub wavelength_nm: f64,
+    /// Wavelength (nm); default: the lens's primary wavelength (Zemax PWAV), else the d line,
+    /// 587.5618 nm.
+    #[arg(long)]
+    pub wavelength_nm: Option<f64>,
     /// Print one JSON object instead of a table.
     #[arg(long)]
     pub json: bool,
+    #[command(flatten)]
+    pub read: ReadArgs,
 }
 
 #[derive(Debug, Serialize)]
@@ -81,7 +84,9 @@ fn hit_json(h: &Hit) -> HitJson {
 }
 
 pub fn run(args: &TraceArgs, quiet: bool) -> anyhow::Result<()> {
-    let lambda = wavelength(args.wavelength_nm)?;
+    if let Some(nm) = args.wavelength_nm {
+        wavelength(nm)?;
+    }
     anyhow::ensure!(
         args.field_deg.is_finite() && args.field_deg.abs() < 90.0,
         "--field-deg must be between -90 and 90 degrees (exclusive), got {}",
@@ -95,8 +100,9 @@ pub fn run(args: &TraceArgs, quiet: bool) -> anyhow::Result<()> {
         args.azimuth_deg.is_finite(),
         "--azimuth-deg must be a finite number"
     );
-    let loaded = lens_library::load(&args.lens, quiet || args.json)?;
+    let loaded = lens_library::load_with(&args.lens, quiet || args.json, &args.read.options())?;
     let sys = &loaded.system;
+    let lambda = wavelength(args.wavelength_nm.unwrap_or(sys.default_wavelength_nm()))?;
     let seq = Sequence::forward(sys, lambda);
     let ray = Ray::collimated(
         args.field_deg.to_radians(),

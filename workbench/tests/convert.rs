@@ -1,0 +1,209 @@
+//! End-to-end tests of Zemax and PBRT files on the command line: `convert` to XML, `info` and
+//! `trace` reading them directly, `--config` and `--pbrt-convention`.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+use serde_json::Value;
+
+fn flarebench(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_flarebench"))
+        .args(args)
+        .output()
+        .expect("binary runs")
+}
+
+fn json(args: &[&str]) -> Value {
+    let out = flarebench(args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("valid JSON")
+}
+
+fn data(file: &str) -> String {
+    let dir = if file.ends_with(".dat") {
+        "pbrt"
+    } else {
+        "zemax"
+    };
+    format!("{}/../tests/data/{dir}/{file}", env!("CARGO_MANIFEST_DIR"))
+}
+
+fn temp_dir(tag: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("flarebench-convert-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+#[test]
+fn a_converted_zemax_lens_has_the_same_paraxial_data_as_the_original() {
+    let dir = temp_dir("same");
+    for file in ["ol_lens1.zmx", "ol_lens_thorlabs_iso_8859_1.zmx"] {
+        let out = dir.join(file.replace(".zmx", ".xml"));
+        let run = flarebench(&["convert", &data(file), "-o", out.to_str().unwrap()]);
+        assert!(
+            run.status.success(),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        let said = String::from_utf8(run.stdout).unwrap();
+        assert!(
+            said.starts_with(&format!("wrote {}", out.display())),
+            "{said}"
+        );
+        let zmx = json(&["info", &data(file), "--json"]);
+        let xml = json(&["info", out.to_str().unwrap(), "--json"]);
+        for key in [
+            "efl_mm",
+            "bfl_mm",
+            "entrance_pupil_diameter_mm",
+            "wavelength_nm",
+            "primary_wavelength_nm",
+        ] {
+            assert_eq!(zmx[key], xml[key], "{file}: {key}");
+        }
+        assert_eq!(zmx["surfaces"], xml["surfaces"], "{file}");
+    }
+    // The Thorlabs asphere's paraxial data default to its design wavelength.
+    let v = json(&["info", &data("ol_lens_thorlabs_iso_8859_1.zmx"), "--json"]);
+    assert_eq!(v["wavelength_nm"], 780.0);
+    // Thorlabs AL1815: f = 15 mm at 780 nm.
+    assert!((v["efl_mm"].as_f64().unwrap() - 15.0).abs() < 0.01, "{v}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn convert_prints_what_it_approximated() {
+    let dir = temp_dir("warn");
+    let out = dir.join("edmund.xml");
+    let run = flarebench(&[
+        "convert",
+        &data("ol_lens2.zmx"),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(run.status.success());
+    let err = String::from_utf8(run.stderr).unwrap();
+    assert!(
+        err.contains("warning: ") && err.contains("ol_lens2.zmx:34:3: the stop is on SURF 1"),
+        "{err}"
+    );
+    let written = std::fs::read_to_string(&out).unwrap();
+    assert!(
+        written.contains("a flat aperture stop is inserted"),
+        "{written}"
+    );
+    assert!(written.contains("<primaryWavelength>587.6</primaryWavelength>"));
+    // --quiet prints nothing, still writes.
+    std::fs::remove_file(&out).unwrap();
+    let run = flarebench(&[
+        "convert",
+        "-q",
+        &data("ol_lens2.zmx"),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(run.status.success() && run.stderr.is_empty() && run.stdout.is_empty());
+    assert!(out.is_file());
+    // Only XML is written.
+    let run = flarebench(&["convert", &data("ol_lens2.zmx"), "-o", "lens.zmx"]);
+    assert!(!run.status.success());
+    assert!(String::from_utf8_lossy(&run.stderr).contains("must end in .xml"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn refused_files_give_file_line_and_no_output() {
+    let dir = temp_dir("refused");
+    let out = dir.join("mirror.xml");
+    let run = flarebench(&[
+        "convert",
+        &data("ro_HoO-V2C18Ex27.zmx"),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(run.status.code(), Some(1));
+    let err = String::from_utf8(run.stderr).unwrap();
+    assert!(
+        err.contains("ro_HoO-V2C18Ex27.zmx:134:8: field `GLAS`: SURF 4 is a mirror"),
+        "{err}"
+    );
+    assert!(!err.contains("panicked"));
+    assert!(!out.exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn config_selects_a_zemax_configuration() {
+    let file = data("fb_cooke_3config.zmx");
+    // optiland 0.6.3 on ol_lens1.zmx with configuration 2's values set by hand (see
+    // sdk/tests/zemax_pbrt.rs): 24.069300780076663 mm.
+    let v = json(&["info", &file, "--config", "2", "--json"]);
+    assert!((v["efl_mm"].as_f64().unwrap() - 24.069300780076663).abs() < 1e-6);
+    assert!((v["entrance_pupil_diameter_mm"].as_f64().unwrap() - 7.5).abs() < 1e-12);
+    let run = flarebench(&["info", &file, "--config", "9"]);
+    assert!(!run.status.success());
+    assert!(String::from_utf8_lossy(&run.stderr).contains("configurations 1 to 3"));
+    // The same option on trace and convert.
+    let t = json(&[
+        "trace",
+        &file,
+        "--config",
+        "3",
+        "--field-deg",
+        "0",
+        "--height-mm",
+        "1",
+        "--json",
+    ]);
+    assert_eq!(t["fate"], "sensor");
+    let dir = temp_dir("config");
+    let out = dir.join("third.xml");
+    let run = flarebench(&[
+        "convert",
+        &file,
+        "--config",
+        "3",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(run.status.success());
+    let v = json(&["info", out.to_str().unwrap(), "--json"]);
+    assert!((v["efl_mm"].as_f64().unwrap() - 23.13284498748535).abs() < 1e-6);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn pbrt_convention_can_be_chosen() {
+    let file = data("dgauss.dat");
+    let detected = json(&["info", &file, "--json"]);
+    let explicit = json(&[
+        "info",
+        &file,
+        "--pbrt-convention",
+        "separation-before",
+        "--json",
+    ]);
+    assert_eq!(detected["efl_mm"], explicit["efl_mm"]);
+    // Twice the 50 mm table's 50.358 mm (lenses-csv header).
+    assert!((detected["efl_mm"].as_f64().unwrap() - 100.716).abs() < 2e-3);
+    let other = json(&[
+        "info",
+        &file,
+        "--pbrt-convention",
+        "thickness-after",
+        "--json",
+    ]);
+    assert_ne!(detected["efl_mm"], other["efl_mm"]);
+    let run = flarebench(&[
+        "info",
+        "heliar-tronnier",
+        "--pbrt-convention",
+        "thickness-after",
+    ]);
+    assert!(!run.status.success());
+    assert!(String::from_utf8_lossy(&run.stderr).contains("PBRT `.dat` tables only"));
+}
