@@ -13,6 +13,7 @@
 //! curvature lies toward the sensor; the optical axis is +z toward the sensor.
 
 pub mod coating;
+pub mod color;
 pub mod fresnel;
 pub mod ghost;
 pub mod glass;
