@@ -7,11 +7,14 @@
 //! - [`trace`]: the sequential ray tracer (scalar f64, batched structure-of-arrays f32/f64).
 //! - [`fresnel`] and [`coating`]: interface reflectance, bare and with thin-film coatings.
 //! - [`paraxial`]: first-order analysis (focal lengths, pupils, f-number, Petzval sum).
+//! - [`aperture`]: the stop's opening (circle, iris of straight or rounded blades, mask image),
+//!   shared by ghosts and the starburst.
 //!
 //! Conventions (docs/ARCHITECTURE.md): millimetres, nanometres for wavelengths, radians inside;
 //! surfaces are listed object side first; curvature `c = 1/R` with `R > 0` meaning the centre of
 //! curvature lies toward the sensor; the optical axis is +z toward the sensor.
 
+pub mod aperture;
 pub mod coating;
 pub mod color;
 pub mod fresnel;

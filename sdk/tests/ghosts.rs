@@ -139,3 +139,45 @@ fn approximate_bounds_are_close_to_precise_ones_near_the_axis() {
     assert!(compared > 10, "only {compared} ghosts compared");
     let _ = BoundsMode::Precise;
 }
+
+#[test]
+fn bounds_tables_interpolate_and_refuse_other_lenses() {
+    use flarebench_sdk::ghost::table::{BoundsTable, angle_steps};
+    let sys = lens("heliar-tronnier");
+    let angles = angle_steps(2.0, 0.5);
+    assert_eq!(angles, vec![0.0, 0.5, 1.0, 1.5, 2.0]);
+    let table = BoundsTable::compute(&sys, &angles, BoundsMode::Precise, 550.0, &|| {});
+    table.check_for(&sys).unwrap();
+    let g = table
+        .ghost_index(GhostPath {
+            first: 4,
+            second: 3,
+        })
+        .unwrap();
+    let (a, b) = (table.bounds[g][1].unwrap(), table.bounds[g][2].unwrap());
+    let mid = table.lookup(g, 0.75).unwrap();
+    assert_eq!(mid.entrance, a.entrance.union(&b.entrance));
+    assert!((mid.energy_share - 0.5 * (a.energy_share + b.energy_share)).abs() < 1e-12);
+    assert_eq!(table.lookup(g, 1.0).unwrap(), b);
+    assert!(table.lookup(g, 2.5).is_none());
+    let text = serde_json::to_string(&table).unwrap();
+    let back: BoundsTable = serde_json::from_str(&text).unwrap();
+    assert!(back == table, "the JSON round trip changed the table");
+    let mut other = sys.clone();
+    other.surfaces[0].thickness += 0.01;
+    assert!(
+        table
+            .check_for(&other)
+            .unwrap_err()
+            .contains("not this prescription")
+    );
+    // Approximate mode is quick and finds the same ghosts with light near the axis.
+    let approx = BoundsTable::compute(&sys, &angles, BoundsMode::Approximate, 550.0, &|| {});
+    let lit = |t: &BoundsTable| t.bounds.iter().filter(|b| b[0].is_some()).count();
+    assert!(
+        lit(&approx) + 2 >= lit(&table),
+        "{} vs {}",
+        lit(&approx),
+        lit(&table)
+    );
+}

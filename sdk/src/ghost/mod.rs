@@ -5,10 +5,12 @@
 //! - [`grid`]: a grid of parallel rays traced along one ghost path at one wavelength.
 //! - [`bounds`]: where on the entrance plane the rays that reach the sensor start, per ghost
 //!   and incidence angle (approximate paraxial and precise traced modes).
+//! - [`table`]: bounds precomputed over a range of angles, stored and interpolated.
 
 pub mod bounds;
 pub mod enumerate;
 pub mod grid;
+pub mod table;
 
 pub use bounds::{GhostBounds, Rect};
 pub use enumerate::{GhostPath, enumerate_ghosts, reflecting_surfaces};
