@@ -9,7 +9,7 @@ use flarebench_sdk::ghost::{
 };
 use flarebench_sdk::io::read_lens;
 use flarebench_sdk::paraxial::stop_opening;
-use flarebench_sdk::trace::{Ray, RayBatch, Sequence};
+use flarebench_sdk::trace::{InterfaceTableSet, Ray, RayBatch, Sequence};
 
 fn lens(stem: &str) -> LensSystem {
     let p = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../lenses/{stem}.xml"));
@@ -71,13 +71,14 @@ fn batched_ghost_weights_match_the_scalar_throughput() {
 fn precise_bounds_hold_every_passing_ray_and_are_symmetric_on_axis() {
     let sys = lens("heliar-tronnier");
     let mut scratch = GridTrace::default();
-    let direct = bounds::direct_flux(&sys, 550.0, 0.0, &mut scratch);
+    let tables = InterfaceTableSet::for_system(&sys, 550.0);
+    let direct = bounds::direct_flux(&sys, &tables, 0.0, &mut scratch);
     assert!(direct > 0.0);
     let path = GhostPath {
         first: 4,
         second: 3,
     };
-    let b = bounds::precise(&sys, path, 550.0, 0.0, direct, &mut scratch)
+    let b = bounds::precise(&sys, path, &tables, 0.0, direct, &mut scratch)
         .expect("ghost 4-3 reaches the sensor");
     let e = b.entrance;
     assert!((e.x0 + e.x1).abs() < 0.05 * e.width(), "{e:?}");
@@ -110,11 +111,12 @@ fn approximate_bounds_are_close_to_precise_ones_near_the_axis() {
     let sys = lens("heliar-tronnier");
     let mut scratch = GridTrace::default();
     let theta = 2f64.to_radians();
-    let direct = bounds::direct_flux(&sys, 550.0, theta, &mut scratch);
+    let tables = InterfaceTableSet::for_system(&sys, 550.0);
+    let direct = bounds::direct_flux(&sys, &tables, theta, &mut scratch);
     let mut compared = 0;
     for path in enumerate_ghosts(&sys) {
         let (Some(p), Some(a)) = (
-            bounds::precise(&sys, path, 550.0, theta, direct, &mut scratch),
+            bounds::precise(&sys, path, &tables, theta, direct, &mut scratch),
             bounds::approximate(&sys, path, 550.0, theta),
         ) else {
             continue;

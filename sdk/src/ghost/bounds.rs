@@ -16,7 +16,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::paraxial::stop_opening;
 use crate::system::LensSystem;
-use crate::trace::{Interaction, Sequence};
+use crate::trace::{Interaction, InterfaceTableSet, Sequence};
 
 use super::enumerate::GhostPath;
 use super::grid::{GridTrace, trace_grid};
@@ -142,12 +142,12 @@ pub fn entrance_search_rect(system: &LensSystem, theta: f64) -> Rect {
 /// forward path traced on a fine grid, weights summed over the rays that pass.
 pub fn direct_flux(
     system: &LensSystem,
-    lambda_nm: f64,
+    tables: &InterfaceTableSet,
     theta: f64,
     scratch: &mut GridTrace,
 ) -> f64 {
-    let seq = Sequence::forward(system, lambda_nm)
-        .with_interface_tables()
+    let seq = Sequence::forward(system, tables.lambda_nm)
+        .with_tables_from(tables)
         .cast::<f32>();
     let stop = stop_opening(system);
     let rect = entrance_search_rect(system, theta);
@@ -164,19 +164,20 @@ fn passing_flux(g: &GridTrace, theta: f64) -> f64 {
     w * g.cell_area() * theta.cos()
 }
 
-/// Precise bounds of `path` at `theta` (radians) and `lambda_nm`; `None` when no ray of the
-/// ghost reaches the sensor. `direct` is [`direct_flux`] at the same angle.
+/// Precise bounds of `path` at `theta` (radians), at the wavelength of `tables` (the lens's
+/// interface tables, built once); `None` when no ray of the ghost reaches the sensor.
+/// `direct` is [`direct_flux`] at the same angle.
 pub fn precise(
     system: &LensSystem,
     path: GhostPath,
-    lambda_nm: f64,
+    tables: &InterfaceTableSet,
     theta: f64,
     direct: f64,
     scratch: &mut GridTrace,
 ) -> Option<GhostBounds> {
-    let seq = Sequence::ghost(system, lambda_nm, path.first, path.second)
+    let seq = Sequence::ghost(system, tables.lambda_nm, path.first, path.second)
         .ok()?
-        .with_interface_tables()
+        .with_tables_from(tables)
         .cast::<f32>();
     let stop = stop_opening(system);
     let mut rect = entrance_search_rect(system, theta);
@@ -272,9 +273,7 @@ pub fn approximate(
     lambda_nm: f64,
     theta: f64,
 ) -> Option<GhostBounds> {
-    let seq = Sequence::ghost(system, lambda_nm, path.first, path.second)
-        .ok()?
-        .with_interface_tables();
+    let seq = Sequence::ghost(system, lambda_nm, path.first, path.second).ok()?;
     let u = theta.tan();
     // y = a·y0 + b·u and n·u' = c·y0 + d·u, with the index signed by the travel direction.
     let (mut a, mut b, mut c, mut d) = (1.0, 0.0, 0.0, 1.0);
@@ -300,8 +299,15 @@ pub fn approximate(
                 return None;
             }
         }
-        if let Some(t) = s.table {
-            factor *= seq.tables[t as usize].values[crate::trace::TABLE_LEN - 1];
+        // Normal-incidence Fresnel/coating factor of this step.
+        if s.interaction != Interaction::Sensor {
+            let c = &seq.coatings[s.surface];
+            let r = c.reflectance(s.n_from, s.n_to, 1.0, lambda_nm, s.forward);
+            factor *= if s.interaction == Interaction::Reflect {
+                r
+            } else {
+                1.0 - r
+            };
         }
         let sign = if n_signed > 0.0 { 1.0 } else { -1.0 };
         let n_to = match s.interaction {

@@ -5,6 +5,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::system::LensSystem;
+use crate::trace::InterfaceTableSet;
 
 use super::bounds::{self, BoundsMode, GhostBounds};
 use super::enumerate::{GhostPath, enumerate_ghosts};
@@ -60,13 +61,14 @@ impl BoundsTable {
         progress: &(dyn Fn() + Sync),
     ) -> BoundsTable {
         let ghosts = enumerate_ghosts(system);
+        let tables = InterfaceTableSet::for_system(system, wavelength_nm);
         let per_angle: Vec<Vec<Option<GhostBounds>>> = angles_deg
             .par_iter()
             .map_init(GridTrace::default, |scratch, &deg| {
                 let theta = deg.to_radians();
                 let direct = match mode {
                     BoundsMode::Precise => {
-                        bounds::direct_flux(system, wavelength_nm, theta, scratch)
+                        bounds::direct_flux(system, &tables, theta, scratch)
                     }
                     BoundsMode::Approximate => 0.0,
                 };
@@ -74,7 +76,7 @@ impl BoundsTable {
                     .iter()
                     .map(|&g| match mode {
                         BoundsMode::Precise => {
-                            bounds::precise(system, g, wavelength_nm, theta, direct, scratch)
+                            bounds::precise(system, g, &tables, theta, direct, scratch)
                         }
                         BoundsMode::Approximate => {
                             bounds::approximate(system, g, wavelength_nm, theta)

@@ -2,6 +2,7 @@
 
 mod convert;
 mod info;
+mod precompute;
 mod trace;
 
 use std::process::ExitCode;
@@ -23,6 +24,8 @@ pub struct Cli {
 pub enum Command {
     /// Show a lens prescription and its paraxial data.
     Info(info::InfoArgs),
+    /// Precompute ghost bounds over a range of incidence angles (for `render --precomputed`).
+    Precompute(precompute::PrecomputeArgs),
     /// Trace one collimated ray through a lens and show every surface it meets.
     Trace(trace::TraceArgs),
     /// Read a lens file (.xml, Zemax .zmx, PBRT .dat) and write it as flarebench XML.
@@ -35,6 +38,7 @@ pub fn main() -> ExitCode {
     let result = match &cli.command {
         Command::Info(a) => info::run(a, cli.quiet),
         Command::Trace(a) => trace::run(a, cli.quiet),
+        Command::Precompute(a) => precompute::run(a, cli.quiet),
         Command::Convert(a) => convert::run(a, cli.quiet),
     };
     match result {

@@ -1,0 +1,113 @@
+//! `flarebench precompute`: ghost bounds over a range of incidence angles, to a JSON file that
+//! `render --precomputed` reads.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::Context;
+use clap::{Args, ValueEnum};
+use flarebench_sdk::ghost::bounds::BoundsMode;
+use flarebench_sdk::ghost::table::{BoundsTable, angle_steps};
+use flarebench_sdk::paraxial::analyse;
+use flarebench_sdk::spectrum::LAMBDA_D_NM;
+use indicatif::{ProgressBar, ProgressStyle};
+
+use crate::lens_library;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Mode {
+    /// Paraxial bounds: about a millisecond for a whole lens.
+    Approximate,
+    /// Traced and refined bounds, energies and grid sizes.
+    Precise,
+}
+
+#[derive(Debug, Args)]
+pub struct PrecomputeArgs {
+    /// Lens file or the name of a bundled lens.
+    pub lens: String,
+    /// Output file (JSON, format in docs/formats.md).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    #[arg(long, value_enum, default_value_t = Mode::Precise)]
+    pub mode: Mode,
+    /// Largest angle (degrees); default: half the film diagonal's field plus 10°, at most 89°.
+    #[arg(long)]
+    pub max_angle_deg: Option<f64>,
+    /// Angle step (degrees), at most 0.5.
+    #[arg(long, default_value_t = 0.5)]
+    pub step_deg: f64,
+    /// Print a summary as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(args: &PrecomputeArgs, quiet: bool) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        args.step_deg > 0.0 && args.step_deg <= 0.5,
+        "--step-deg must be in (0, 0.5], got {}",
+        args.step_deg
+    );
+    let loaded = lens_library::load(&args.lens, quiet || args.json)?;
+    let sys = &loaded.system;
+    let max = match args.max_angle_deg {
+        Some(m) => m,
+        None => {
+            let efl = analyse(sys, LAMBDA_D_NM)?.efl_mm.abs();
+            let half_diag = 0.5 * sys.film_width_mm.hypot(sys.film_height_mm);
+            (half_diag / efl).atan().to_degrees() + 10.0
+        }
+    }
+    .min(89.0);
+    anyhow::ensure!(max > 0.0, "--max-angle-deg must be positive");
+    let angles = angle_steps(max, args.step_deg);
+    let mode = match args.mode {
+        Mode::Approximate => BoundsMode::Approximate,
+        Mode::Precise => BoundsMode::Precise,
+    };
+    let bar = if quiet || args.json {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new(angles.len() as u64).with_style(
+            ProgressStyle::with_template(
+                "{msg} [{bar:40}] {pos}/{len} angles, {elapsed} (eta {eta})",
+            )
+            .expect("valid template")
+            .progress_chars("=> "),
+        )
+    };
+    bar.set_message(format!("precomputing {}", sys.name));
+    let t = Instant::now();
+    let table = BoundsTable::compute(sys, &angles, mode, 550.0, &|| bar.inc(1));
+    let secs = t.elapsed().as_secs_f64();
+    bar.finish_and_clear();
+    let text = serde_json::to_string(&table)?;
+    let tmp = args.output.with_extension("json.tmp");
+    std::fs::write(&tmp, text).with_context(|| format!("could not write {}", tmp.display()))?;
+    std::fs::rename(&tmp, &args.output)
+        .with_context(|| format!("could not write {}", args.output.display()))?;
+    let lit = table
+        .bounds
+        .iter()
+        .flatten()
+        .filter(|b| b.is_some())
+        .count();
+    if args.json {
+        println!(
+            "{}",
+            serde_json::json!({
+                "lens": sys.name, "output": args.output.display().to_string(),
+                "mode": mode, "angles": angles.len(), "max_angle_deg": max,
+                "ghosts": table.ghosts.len(), "entries_with_light": lit, "seconds": secs,
+            })
+        );
+    } else if !quiet {
+        eprintln!(
+            "wrote {}: {} ghosts × {} angles (0–{max:.2}°, {lit} with light) in {secs:.2} s",
+            args.output.display(),
+            table.ghosts.len(),
+            angles.len()
+        );
+    }
+    Ok(())
+}
