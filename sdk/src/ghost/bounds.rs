@@ -121,9 +121,11 @@ pub enum BoundsMode {
     Precise,
 }
 
-/// Grid sizes the precise mode traces with.
+/// Grid sizes the precise mode searches with (from scratch, and from a nearby angle's
+/// rectangle) and measures with.
 const SEARCH_GRID: usize = 33;
-const REFINE_GRID: usize = 49;
+const WARM_GRID: usize = 25;
+const REFINE_GRID: usize = 33;
 /// Grid size range chosen for rendering.
 pub const MIN_GRID: usize = 16;
 pub const MAX_GRID: usize = 128;
@@ -175,47 +177,110 @@ pub fn precise(
     direct: f64,
     scratch: &mut GridTrace,
 ) -> Option<GhostBounds> {
-    let seq = Sequence::ghost(system, tables.lambda_nm, path.first, path.second)
-        .ok()?
-        .with_tables_from(tables)
-        .cast::<f32>();
+    let seq = ghost_sequence(system, path, tables)?;
+    precise_from(system, &seq, theta, direct, None, scratch)
+}
+
+/// The f32 sequence of a ghost with its interface tables, as the precise search traces it.
+pub fn ghost_sequence(
+    system: &LensSystem,
+    path: GhostPath,
+    tables: &InterfaceTableSet,
+) -> Option<Sequence<f32>> {
+    Some(
+        Sequence::ghost(system, tables.lambda_nm, path.first, path.second)
+            .ok()?
+            .with_tables_from(tables)
+            .cast::<f32>(),
+    )
+}
+
+/// [`precise`], starting from the entrance rectangle found at a nearby angle (`start`): the
+/// search then traces one grid over that rectangle, widened by a quarter, instead of a search
+/// and a refinement over the whole front element. If the ghost reaches the edge of the
+/// widened rectangle, or is not found there, the full search runs.
+pub fn precise_from(
+    system: &LensSystem,
+    seq: &Sequence<f32>,
+    theta: f64,
+    direct: f64,
+    start: Option<Rect>,
+    scratch: &mut GridTrace,
+) -> Option<GhostBounds> {
     let stop = stop_opening(system);
-    let mut rect = entrance_search_rect(system, theta);
-    for n in [SEARCH_GRID, REFINE_GRID, REFINE_GRID] {
-        trace_grid(&seq, theta, rect, n, stop, scratch);
-        let g = &*scratch;
-        let found = Rect::bounding((0..n * n).filter(|&k| g.passes(k)).map(|k| {
-            let (i, j) = (k % n, k / n);
-            [
-                g.rect.x0 + g.rect.width() * i as f64 / (n - 1) as f64,
-                g.rect.y0 + g.rect.height() * j as f64 / (n - 1) as f64,
-            ]
-        }))?;
-        // One cell of margin: the true edge lies between a passing and a failing vertex.
-        let (cx, cy) = (
-            g.rect.width() / (n - 1) as f64,
-            g.rect.height() / (n - 1) as f64,
-        );
-        rect = found.expand(cx, cy);
+    let search = entrance_search_rect(system, theta);
+    // Each plan: (rectangle, whether it is the full search).
+    let mut plan: Vec<(Rect, bool)> = Vec::with_capacity(2);
+    if let Some(r) = start.filter(|r| !r.is_empty()) {
+        plan.push((r.expand(0.25 * r.width(), 0.25 * r.height()), false));
     }
-    trace_grid(&seq, theta, rect, REFINE_GRID, stop, scratch);
+    plan.push((search, true));
+    let mut rect = None;
+    'plans: for (mut r, full) in plan {
+        // The full search traces twice (search, then refine); a warm start once.
+        let grids: &[usize] = if full {
+            &[SEARCH_GRID, SEARCH_GRID]
+        } else {
+            &[WARM_GRID]
+        };
+        for &n in grids {
+            trace_grid(seq, theta, r, n, stop, scratch);
+            let Some(found) = passing_box(scratch) else {
+                continue 'plans;
+            };
+            let (cx, cy) = cell_size(scratch);
+            // A warm start must contain the ghost with room to spare.
+            if !full
+                && (found.x0 - r.x0 < cx
+                    || r.x1 - found.x1 < cx
+                    || found.y0 - r.y0 < cy
+                    || r.y1 - found.y1 < cy)
+            {
+                continue 'plans;
+            }
+            // One cell of margin: the true edge lies between a passing and a failing vertex.
+            r = found.expand(cx, cy);
+        }
+        rect = Some(r);
+        break;
+    }
+    let rect = rect?;
+    trace_grid(seq, theta, rect, REFINE_GRID, stop, scratch);
     let g = &*scratch;
     let n = g.n;
     let passing: Vec<usize> = (0..n * n).filter(|&k| g.passes(k)).collect();
-    if passing.is_empty() {
-        return None;
-    }
+    let found = passing_box(g)?;
+    let (cx, cy) = cell_size(g);
     let sensor = Rect::bounding(passing.iter().map(|&k| g.sensor[k].map(f64::from)))?;
     let mean_intensity =
         passing.iter().map(|&k| g.weight[k] as f64).sum::<f64>() / passing.len() as f64;
     let flux = passing_flux(g, theta);
     Some(GhostBounds {
-        entrance: rect,
+        entrance: found.expand(cx, cy),
         sensor,
         grid: grid_for_spread(g),
         mean_intensity,
         energy_share: if direct > 0.0 { flux / direct } else { 0.0 },
     })
+}
+
+/// The entrance-plane positions of the passing vertices' bounding box.
+fn passing_box(g: &GridTrace) -> Option<Rect> {
+    let n = g.n;
+    let d = (n - 1) as f64;
+    Rect::bounding((0..n * n).filter(|&k| g.passes(k)).map(|k| {
+        let (i, j) = (k % n, k / n);
+        [
+            g.rect.x0 + g.rect.width() * i as f64 / d,
+            g.rect.y0 + g.rect.height() * j as f64 / d,
+        ]
+    }))
+}
+
+/// Width and height of one grid cell on the entrance plane.
+fn cell_size(g: &GridTrace) -> (f64, f64) {
+    let d = (g.n - 1) as f64;
+    (g.rect.width() / d, g.rect.height() / d)
 }
 
 /// Vertices per side for rendering, from how unevenly the grid's cells land on the sensor: the

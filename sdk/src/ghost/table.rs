@@ -51,7 +51,7 @@ pub fn angle_steps(max_deg: f64, step_deg: f64) -> Vec<f64> {
 }
 
 impl BoundsTable {
-    /// Computes the bounds of every ghost at every angle; `progress` is called once per angle
+    /// Computes the bounds of every ghost at every angle; `progress` is called once per ghost
     /// finished (from worker threads).
     pub fn compute(
         system: &LensSystem,
@@ -62,33 +62,43 @@ impl BoundsTable {
     ) -> BoundsTable {
         let ghosts = enumerate_ghosts(system);
         let tables = InterfaceTableSet::for_system(system, wavelength_nm);
-        let per_angle: Vec<Vec<Option<GhostBounds>>> = angles_deg
+        let direct: Vec<f64> = match mode {
+            BoundsMode::Precise => angles_deg
+                .par_iter()
+                .map_init(GridTrace::default, |scratch, &deg| {
+                    bounds::direct_flux(system, &tables, deg.to_radians(), scratch)
+                })
+                .collect(),
+            BoundsMode::Approximate => vec![0.0; angles_deg.len()],
+        };
+        // Ghosts in parallel; within a ghost, angles in order, each search starting from the
+        // previous angle's rectangle.
+        let bounds: Vec<Vec<Option<GhostBounds>>> = ghosts
             .par_iter()
-            .map_init(GridTrace::default, |scratch, &deg| {
-                let theta = deg.to_radians();
-                let direct = match mode {
-                    BoundsMode::Precise => {
-                        bounds::direct_flux(system, &tables, theta, scratch)
-                    }
-                    BoundsMode::Approximate => 0.0,
-                };
-                let row = ghosts
+            .map_init(GridTrace::default, |scratch, &g| {
+                let mut prev: Option<GhostBounds> = None;
+                let seq = bounds::ghost_sequence(system, g, &tables);
+                let row: Vec<Option<GhostBounds>> = angles_deg
                     .iter()
-                    .map(|&g| match mode {
-                        BoundsMode::Precise => {
-                            bounds::precise(system, g, &tables, theta, direct, scratch)
-                        }
-                        BoundsMode::Approximate => {
-                            bounds::approximate(system, g, wavelength_nm, theta)
-                        }
+                    .zip(&direct)
+                    .map(|(&deg, &direct)| {
+                        let theta = deg.to_radians();
+                        let b = match mode {
+                            BoundsMode::Precise => seq.as_ref().and_then(|seq| {
+                                let start = prev.map(|p| p.entrance);
+                                bounds::precise_from(system, seq, theta, direct, start, scratch)
+                            }),
+                            BoundsMode::Approximate => {
+                                bounds::approximate(system, g, wavelength_nm, theta)
+                            }
+                        };
+                        prev = b;
+                        b
                     })
                     .collect();
                 progress();
                 row
             })
-            .collect();
-        let bounds = (0..ghosts.len())
-            .map(|g| per_angle.iter().map(|row| row[g]).collect())
             .collect();
         BoundsTable {
             format: FORMAT.to_string(),

@@ -68,9 +68,9 @@ pub fn run(args: &PrecomputeArgs, quiet: bool) -> anyhow::Result<()> {
     let bar = if quiet || args.json {
         ProgressBar::hidden()
     } else {
-        ProgressBar::new(angles.len() as u64).with_style(
+        ProgressBar::new(flarebench_sdk::ghost::enumerate_ghosts(sys).len() as u64).with_style(
             ProgressStyle::with_template(
-                "{msg} [{bar:40}] {pos}/{len} angles, {elapsed} (eta {eta})",
+                "{msg} [{bar:40}] {pos}/{len} ghosts, {elapsed} (eta {eta})",
             )
             .expect("valid template")
             .progress_chars("=> "),

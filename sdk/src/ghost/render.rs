@@ -1,0 +1,242 @@
+//! Rendering one ghost into an HDR image: trace its grid at each wavelength band, turn every
+//! grid cell into two triangles on the sensor, and rasterise them with energy-conserving
+//! intensities.
+//!
+//! **Energy.** A triangle carries the flux that crossed its half cell of the entrance plane,
+//! `E · A_entrance · cos θ`, spread uniformly over its area on the sensor, then weighted by the
+//! interpolated Fresnel/coating throughput, the aperture transmission at the stop and the
+//! feathered clip. The rasteriser adds covered area × irradiance, so a triangle adds exactly
+//! its flux to the image (when it lies in the frame), however small or folded it is.
+//!
+//! **Caustics.** Where the mesh folds, triangles collapse. Light cannot be focused below the
+//! diffraction limit, so a triangle smaller than the Airy disc of the lens at this wavelength,
+//! `π (1.22 λ N)²` (N the working f-number), is scaled up about its centroid to that area:
+//! the flux is kept and the peak irradiance is bounded by what optics allows.
+//!
+//! **Image orientation.** The output is the photograph: the sensor image turned by 180°, so a
+//! point at sensor (x, y) mm lands at pixel ((0.5 − x/W)·w, (0.5 + y/H)·h), pixel rows downward.
+
+use crate::aperture::Aperture;
+use crate::image::HdrImage;
+use crate::raster::rasterize;
+use crate::system::LensSystem;
+use crate::trace::{InterfaceTableSet, Sequence};
+
+use super::bounds::GhostBounds;
+use super::enumerate::GhostPath;
+use super::grid::{GridTrace, trace_grid};
+
+/// The output image and the part of the sensor it shows.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Frame {
+    pub width: usize,
+    pub height: usize,
+    pub film_width_mm: f64,
+    pub film_height_mm: f64,
+}
+
+impl Frame {
+    /// Pixel coordinates of sensor point (x, y) mm (photograph orientation).
+    pub fn to_pixel(&self, x: f64, y: f64) -> [f32; 2] {
+        [
+            ((0.5 - x / self.film_width_mm) * self.width as f64) as f32,
+            ((0.5 + y / self.film_height_mm) * self.height as f64) as f32,
+        ]
+    }
+
+    /// Area of one pixel on the sensor (mm²).
+    pub fn pixel_area_mm2(&self) -> f64 {
+        (self.film_width_mm / self.width as f64) * (self.film_height_mm / self.height as f64)
+    }
+
+    /// Size of one pixel on the sensor (mm), the larger of its two sides.
+    pub fn pixel_mm(&self) -> f64 {
+        (self.film_width_mm / self.width as f64).max(self.film_height_mm / self.height as f64)
+    }
+}
+
+/// One wavelength band of a spectral render: where to trace and what colour it adds.
+#[derive(Clone, Debug)]
+pub struct Band {
+    pub lambda_nm: f64,
+    /// Linear-sRGB weight of the band (for a light of unit irradiance).
+    pub rgb: [f32; 3],
+    /// The lens's interface tables at `lambda_nm`.
+    pub tables: InterfaceTableSet,
+}
+
+impl Band {
+    /// A band at `lambda_nm` with colour `rgb` for `system`.
+    pub fn new(system: &LensSystem, lambda_nm: f64, rgb: [f32; 3]) -> Self {
+        Band {
+            lambda_nm,
+            rgb,
+            tables: InterfaceTableSet::for_system(system, lambda_nm),
+        }
+    }
+}
+
+/// A collimated light as the ghost renderer sees it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GhostLight {
+    /// Angle to the axis and azimuth (radians).
+    pub theta: f64,
+    pub phi: f64,
+    /// Irradiance perpendicular to the beam (image units per mm²).
+    pub irradiance: f64,
+}
+
+/// What rendering a ghost did.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GhostStats {
+    /// Rays traced (grid vertices × bands).
+    pub rays: usize,
+    /// Triangles rasterised.
+    pub triangles: usize,
+    /// Flux carried by the rasterised triangles (before the frame crops it), summed over the
+    /// bands' luminance weights.
+    pub flux: f64,
+}
+
+/// Reusable buffers for [`render_ghost`].
+#[derive(Debug, Default)]
+pub struct GhostScratch {
+    grid: GridTrace,
+    positions: Vec<[f32; 2]>,
+    attrs: Vec<[f32; 5]>,
+    triangles: Vec<[u32; 3]>,
+}
+
+/// Everything fixed for a frame: lens data the renderer needs per ghost.
+#[derive(Clone, Copy, Debug)]
+pub struct GhostContext<'a> {
+    pub system: &'a LensSystem,
+    pub aperture: &'a Aperture,
+    pub frame: Frame,
+    /// The stop's working radius (mm) and the working f-number.
+    pub stop_radius: f64,
+    pub f_number: f64,
+}
+
+/// Renders `path` lit by `light` into `img` with an `n × n` grid over `bounds.entrance`, one
+/// trace per band.
+#[allow(clippy::too_many_arguments)]
+pub fn render_ghost(
+    ctx: &GhostContext<'_>,
+    path: GhostPath,
+    bounds: &GhostBounds,
+    n: usize,
+    light: &GhostLight,
+    bands: &[Band],
+    scratch: &mut GhostScratch,
+    img: &mut HdrImage,
+) -> GhostStats {
+    let mut stats = GhostStats::default();
+    let (sphi, cphi) = light.phi.sin_cos();
+    let cos_t = light.theta.cos();
+    let frame = ctx.frame;
+    let px_area = frame.pixel_area_mm2();
+    let feather = 2.0 / (n.max(2) - 1) as f32;
+    for band in bands {
+        let Ok(seq) = Sequence::ghost(ctx.system, band.lambda_nm, path.first, path.second) else {
+            return stats;
+        };
+        let seq = seq.with_tables_from(&band.tables).cast::<f32>();
+        trace_grid(
+            &seq,
+            light.theta,
+            bounds.entrance,
+            n,
+            ctx.stop_radius,
+            &mut scratch.grid,
+        );
+        let g = &scratch.grid;
+        stats.rays += n * n;
+        // Smallest sensor area a triangle may have: the Airy disc.
+        let airy = 1.22 * band.lambda_nm * 1e-6 * ctx.f_number;
+        let min_area = std::f64::consts::PI * airy * airy;
+        let half_cell = 0.5 * g.cell_area() * cos_t;
+        scratch.positions.clear();
+        scratch.attrs.clear();
+        scratch.triangles.clear();
+        let rot = |k: usize| {
+            let [x, y] = g.sensor[k].map(f64::from);
+            [x * cphi - y * sphi, x * sphi + y * cphi]
+        };
+        let lum =
+            0.2126 * band.rgb[0] as f64 + 0.7152 * band.rgb[1] as f64 + 0.0722 * band.rgb[2] as f64;
+        for j in 0..n - 1 {
+            for i in 0..n - 1 {
+                let k00 = j * n + i;
+                let quad = [k00, k00 + 1, k00 + n + 1, k00 + n];
+                for tri in [[quad[0], quad[1], quad[2]], [quad[0], quad[2], quad[3]]] {
+                    if !tri.iter().all(|&k| g.completed[k]) {
+                        continue;
+                    }
+                    // Fully clipped triangles add nothing.
+                    if tri.iter().all(|&k| g.max_rel[k] > 1.0 + feather) {
+                        continue;
+                    }
+                    let mut p = tri.map(rot);
+                    let area = 0.5
+                        * ((p[1][0] - p[0][0]) * (p[2][1] - p[0][1])
+                            - (p[2][0] - p[0][0]) * (p[1][1] - p[0][1]))
+                            .abs();
+                    if !area.is_finite() {
+                        continue;
+                    }
+                    let c = [
+                        (p[0][0] + p[1][0] + p[2][0]) / 3.0,
+                        (p[0][1] + p[1][1] + p[2][1]) / 3.0,
+                    ];
+                    let area = if area >= min_area {
+                        area
+                    } else if area > 0.0 {
+                        // Grow about the centroid to the diffraction limit.
+                        let s = (min_area / area).sqrt();
+                        for q in &mut p {
+                            *q = [c[0] + (q[0] - c[0]) * s, c[1] + (q[1] - c[1]) * s];
+                        }
+                        min_area
+                    } else {
+                        // Degenerate: a small triangle of area 2·airy² at the point.
+                        let r = airy;
+                        p = [[c[0] - r, c[1] - r], [c[0] + r, c[1] - r], [c[0], c[1] + r]];
+                        2.0 * r * r
+                    };
+                    let irr = (half_cell / area * light.irradiance * px_area) as f32;
+                    let base = scratch.positions.len() as u32;
+                    for (q, &k) in p.iter().zip(&tri) {
+                        scratch.positions.push(frame.to_pixel(q[0], q[1]));
+                        let [u, v] = g.stop_uv[k];
+                        scratch.attrs.push([irr, g.weight[k], u, v, g.max_rel[k]]);
+                    }
+                    scratch.triangles.push([base, base + 1, base + 2]);
+                    let w_mean = tri.iter().map(|&k| g.weight[k] as f64).sum::<f64>() / 3.0;
+                    stats.flux += half_cell * light.irradiance * w_mean * lum;
+                }
+            }
+        }
+        stats.triangles += scratch.triangles.len();
+        let aperture = ctx.aperture;
+        let rgb = band.rgb;
+        rasterize(
+            img,
+            &scratch.positions,
+            &scratch.attrs,
+            &scratch.triangles,
+            |a: &[f32; 5]| {
+                let clip = smoothstep(1.0 + 0.5 * feather, 1.0 - 0.5 * feather, a[4]);
+                let t = a[0] * a[1] * clip * aperture.transmission_soft(a[2], a[3], feather);
+                [rgb[0] * t, rgb[1] * t, rgb[2] * t]
+            },
+        );
+    }
+    stats
+}
+
+/// 0 at `edge0`, 1 at `edge1`, smooth (C¹) in between; works for either order of the edges.
+fn smoothstep(edge0: f32, edge1: f32, x: f32) -> f32 {
+    let t = ((x - edge0) / (edge1 - edge0)).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
