@@ -8,6 +8,7 @@
 mod atomic;
 mod error;
 mod located;
+mod olf_bounds;
 mod olf_xml;
 mod pbrt;
 mod text;
@@ -18,6 +19,9 @@ use std::path::Path;
 
 pub use atomic::save_xml;
 pub use error::LensFileError;
+pub use olf_bounds::{
+    OlfAngleEntry, OlfGhostBounds, OlfGhostEntry, OlfRect, parse_olf_bounds, read_olf_bounds,
+};
 pub use olf_xml::{parse_olf_xml, write_olf_xml, write_xml};
 pub use pbrt::{PbrtConvention, parse_pbrt};
 pub use zmx::parse_zmx;
