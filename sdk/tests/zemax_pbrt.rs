@@ -351,6 +351,46 @@ fn zemax_configurations_match_optiland() {
     );
 }
 
+#[test]
+fn truncated_and_edited_real_files_never_panic() {
+    use flarebench_sdk::io::{parse_pbrt, parse_zmx};
+    for name in files("zemax", ".zmx") {
+        let bytes = std::fs::read(data("zemax").join(&name)).unwrap();
+        let text = match bytes.strip_prefix(b"\xFF\xFE") {
+            Some(rest) => String::from_utf16_lossy(
+                &rest
+                    .chunks_exact(2)
+                    .map(|c| u16::from_le_bytes([c[0], c[1]]))
+                    .collect::<Vec<_>>(),
+            ),
+            None => String::from_utf8_lossy(&bytes).into_owned(),
+        };
+        // About 60 cuts per file, at character boundaries spread over the whole file.
+        let boundaries: Vec<usize> = text.char_indices().map(|(i, _)| i).collect();
+        let step = (boundaries.len() / 60).max(1);
+        let cuts: Vec<usize> = boundaries.into_iter().step_by(step).collect();
+        for &cut in &cuts {
+            let (head, tail) = text.split_at(cut);
+            for candidate in [head.to_string(), format!("{head}x{tail}")] {
+                if let Err(e) = parse_zmx(&candidate, &name, None) {
+                    assert!(e.line >= 1 && e.column >= 1, "{name} cut at {cut}: {e}");
+                }
+            }
+        }
+    }
+    for name in files("pbrt", ".dat") {
+        let text = std::fs::read_to_string(data("pbrt").join(&name)).unwrap();
+        for cut in (0..text.len())
+            .filter(|&i| text.is_char_boundary(i))
+            .step_by(3)
+        {
+            let (head, tail) = text.split_at(cut);
+            let _ = parse_pbrt(head, &name, None);
+            let _ = parse_pbrt(&format!("{head}-{tail}"), &name, None);
+        }
+    }
+}
+
 // --- conversion -------------------------------------------------------------------------------
 
 /// A fan of collimated rays over the entrance pupil at three field angles.

@@ -189,6 +189,13 @@ pub(super) fn build(
     for (key, pos) in &unknown {
         ctx.warn(*pos, format!("`{key}` records on surfaces are not read"));
     }
+    if reads.is_empty() {
+        return Err(ctx.error(
+            image.pos,
+            "SURF",
+            "no surface between the object and the image (only coordinate breaks)",
+        ));
+    }
 
     // The stop.
     let flagged: Vec<(usize, usize)> = reads

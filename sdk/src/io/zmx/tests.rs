@@ -472,6 +472,10 @@ fn malformed_records_are_errors_at_line_and_column() {
     assert_eq!(e.line, 4);
     let e = parse("").unwrap_err();
     assert!(e.message.contains("0 SURF block(s)"), "{e}");
+    let e =
+        parse("SURF 0\n  DISZ INFINITY\nSURF 1\n  TYPE COORDBRK\n  DISZ 5\nSURF 2\n").unwrap_err();
+    assert!(e.message.contains("only coordinate breaks"), "{e}");
+    assert_eq!(e.line, 6);
 }
 
 #[test]
