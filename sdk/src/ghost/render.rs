@@ -141,7 +141,9 @@ pub fn render_ghost(
         let Ok(seq) = Sequence::ghost(ctx.system, band.lambda_nm, path.first, path.second) else {
             return stats;
         };
-        let seq = seq.with_tables_from(&band.tables).cast::<f32>();
+        // The aperture's shape clips at the stop (from the recorded crossing), so the grid's
+        // radius clip must not clip there a second time.
+        let seq = seq.with_tables_from(&band.tables).aperture_by_mask().cast::<f32>();
         trace_grid(
             &seq,
             light.theta,

@@ -305,6 +305,16 @@ impl Sequence<f64> {
         seq
     }
 
+    /// Leaves the stop crossing that batches record (the last pass) unclipped, for renderers
+    /// that apply the aperture's own shape there from the recorded crossing; other passes
+    /// through the stop still clip at its working radius.
+    pub fn aperture_by_mask(mut self) -> Self {
+        if let Some(s) = self.steps.iter_mut().rfind(|s| s.record_stop) {
+            s.inv_semi2 = 0.0;
+        }
+        self
+    }
+
     /// Builds the Fresnel/coating factor table of every step that changes a ray's weight
     /// (a refraction or reflection at a real boundary), so batches track the throughput.
     pub fn with_interface_tables(self) -> Self {
