@@ -2,6 +2,7 @@
 //!
 //! The optics live in `flarebench-sdk`; this crate turns them into commands.
 
+pub mod aperture_file;
 pub mod cli;
 pub mod lens_library;
 pub mod table;
