@@ -2,7 +2,7 @@
 //! [`ApertureMask`] (the sdk itself has no image dependencies), and where a lens file's
 //! `<mask>` name points.
 //!
-//! Two kinds of grey image are in use (docs/formats.md §1, `mask`):
+//! Two kinds of grey image are in use (docs/formats.md §9):
 //! - **transmission**: white open, black closed (`lenses/masks/aperture.bmp`);
 //! - **OpenLensFlare distance map**: dark at the centre, rising toward the edge of the opening
 //!   and white outside (`lenses/masks/apertureDist.bmp`, the mask the Heliar-Tronnier's stop

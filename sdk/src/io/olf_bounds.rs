@@ -1,7 +1,7 @@
 //! OpenLensFlare's precomputed ghost bounds (`<ghostList>` XML, written by LensPlanner's
 //! `GhostSerializer`; e.g. `tests/data/heliar-tronnier-bounds-full.xml`), read into typed
 //! values. What the numbers mean — units, frames, index conventions and OpenLensFlare's
-//! quirks — is in `docs/formats.md` §6; the conversions here ([`OlfGhostEntry::entrance_mm`],
+//! quirks — is in `docs/formats.md` §8; the conversions here ([`OlfGhostEntry::entrance_mm`],
 //! [`OlfGhostEntry::sensor_mm`]) follow it.
 //!
 //! The reader is strict, as OpenLensFlare's own is: an unknown, repeated or missing tag is an
@@ -94,7 +94,7 @@ impl OlfGhostEntry {
     /// OpenLensFlare's x (the tilt direction) becomes our y, its y our x — a rotation, since
     /// its z axis points toward the object. `front_semi_diameter_mm` is the first surface's
     /// semi-diameter. `None` for an invisible ghost. The plane is 0.1 mm in front of the first
-    /// vertex (docs/formats.md §6).
+    /// vertex (docs/formats.md §8).
     pub fn entrance_mm(&self, front_semi_diameter_mm: f64) -> Option<Rect> {
         let s = front_semi_diameter_mm;
         self.is_visible().then(|| swap_axes(&self.pupil, s, s))
