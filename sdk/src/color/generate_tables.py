@@ -100,8 +100,11 @@ def main():
 //! 5 nm (CIE 015:2004 tables); Mallett & Yuksel 2019 sRGB basis spectra, 5 nm
 //! (doi:10.2312/SR.20191216). CIE data is freely available; colour-science is BSD-3-Clause.
 
-// The literals are the tabulated values exactly, in their shortest round-trip form.
-#![allow(clippy::excessive_precision, clippy::unreadable_literal)]
+#![allow(
+    clippy::excessive_precision,
+    clippy::unreadable_literal,
+    reason = "the literals are the tabulated values exactly, in their shortest round-trip form"
+)]
 """
     parts = [
         header,

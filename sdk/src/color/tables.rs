@@ -5,8 +5,11 @@
 //! 5 nm (CIE 015:2004 tables); Mallett & Yuksel 2019 sRGB basis spectra, 5 nm
 //! (doi:10.2312/SR.20191216). CIE data is freely available; colour-science is BSD-3-Clause.
 
-// The literals are the tabulated values exactly, in their shortest round-trip form.
-#![allow(clippy::excessive_precision, clippy::unreadable_literal)]
+#![allow(
+    clippy::excessive_precision,
+    clippy::unreadable_literal,
+    reason = "the literals are the tabulated values exactly, in their shortest round-trip form"
+)]
 
 /// CIE 1931 2° colour-matching functions `[x̄, ȳ, z̄]`, one row per nanometre.
 pub(super) const CIE1931_2DEG_START_NM: f64 = 360.0;
