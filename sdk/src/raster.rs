@@ -1,0 +1,444 @@
+//! CPU triangle rasterizer for ghost meshes: exact, anti-aliased coverage, tiled over cores.
+//!
+//! **Coverage.** Each triangle adds to every pixel it overlaps
+//! `A · shade(attributes at C)`, where `A` is the exact area of the pixel square covered by the
+//! triangle (pixel², found by clipping the triangle to the square, Sutherland–Hodgman) and `C`
+//! the centroid of that covered piece; attributes are interpolated linearly (barycentric) at
+//! `C`. So the contribution is the exact integral of `shade` over the covered piece whenever
+//! `shade` is affine in the attributes, and energy is conserved exactly: for a constant shade
+//! `c` the image gains `c × (area of the triangle inside the image)`, up to f32 rounding of
+//! the pixel sums. Pixels whose square lies wholly inside the triangle skip the clip (area 1,
+//! centroid at the pixel centre).
+//!
+//! **Conventions.** Positions are pixel coordinates, x to the right and y down; pixel `(i, j)`
+//! covers `[i, i + 1) × [j, j + 1)`. Either winding. Geometry is computed in f64 (from the
+//! f32 inputs), pixels accumulate in f32.
+//!
+//! **Robustness.** A triangle is skipped — adds nothing — when a vertex index is out of range
+//! (of `positions` or of `attrs`), a coordinate or attribute is NaN or infinite, or its area is
+//! zero; nothing it does writes NaN or ∞ into the image (what `shade` returns is added as is).
+//!
+//! **Parallelism.** Triangles are binned into 64 × 64-pixel tiles by their bounding boxes (one
+//! counting sort per call); tiles are rasterized in parallel (rayon), each writing only its
+//! own pixels through disjoint slices — no locks or atomics — and each adding its triangles in
+//! input order, so the result does not depend on the number of threads. The per-triangle and
+//! per-pixel work uses fixed-size stack polygons: no allocation.
+
+mod polygon;
+
+use rayon::prelude::*;
+
+use crate::image::HdrImage;
+use polygon::Polygon;
+
+/// Side of a square tile, in pixels.
+pub const TILE_SIZE: usize = 64;
+
+/// Rasterizes `triangles` (indices into `positions` and `attrs`) into `img`, adding to each
+/// covered pixel the covered area (pixel²) times `shade` of the attributes interpolated at the
+/// covered piece's centroid. See the module documentation for the method and guarantees.
+///
+/// # Panics
+/// If `img.pixels.len() != img.width * img.height` (a broken [`HdrImage`] invariant).
+pub fn rasterize<const N: usize, F>(
+    img: &mut HdrImage,
+    positions: &[[f32; 2]],
+    attrs: &[[f32; N]],
+    triangles: &[[u32; 3]],
+    shade: F,
+) where
+    F: Fn(&[f32; N]) -> [f32; 3] + Sync,
+{
+    assert_eq!(
+        img.pixels.len(),
+        img.width * img.height,
+        "HdrImage invariant: pixels.len() == width * height"
+    );
+    let (width, height) = (img.width, img.height);
+    if width == 0 || height == 0 || triangles.is_empty() {
+        return;
+    }
+    let tiles_x = width.div_ceil(TILE_SIZE);
+    let tiles_y = height.div_ceil(TILE_SIZE);
+    let bins = Bins::build(
+        positions,
+        attrs,
+        triangles,
+        [width, height],
+        [tiles_x, tiles_y],
+    );
+
+    // One view per tile: the tile's part of each of its rows, as disjoint mutable slices.
+    let mut views: Vec<TileView<'_>> = (0..tiles_x * tiles_y)
+        .map(|t| {
+            let (tx, ty) = (t % tiles_x, t / tiles_x);
+            let (x0, y0) = (tx * TILE_SIZE, ty * TILE_SIZE);
+            TileView {
+                index: t,
+                x0,
+                y0,
+                width: TILE_SIZE.min(width - x0),
+                height: TILE_SIZE.min(height - y0),
+                rows: Vec::new(),
+            }
+        })
+        .collect();
+    for (y, row) in img.pixels.chunks_exact_mut(width).enumerate() {
+        let ty = y / TILE_SIZE;
+        if bins.tile_is_empty_row(ty, tiles_x) {
+            continue;
+        }
+        for (tx, segment) in row.chunks_mut(TILE_SIZE).enumerate() {
+            let view = &mut views[ty * tiles_x + tx];
+            if !bins.tile(view.index).is_empty() {
+                view.rows.push(segment);
+            }
+        }
+    }
+    views.retain(|v| !v.rows.is_empty());
+    views.into_par_iter().for_each(|mut view| {
+        let mut scratch = Scratch::NEW;
+        for &t in bins.tile(view.index) {
+            let tri = triangles[t];
+            let setup = Setup::new(
+                tri.map(|i| positions[i as usize]),
+                tri.map(|i| attrs[i as usize]),
+                [view.x0 as f64, view.y0 as f64],
+            );
+            rasterize_in_tile(&mut view, &setup, &shade, &mut scratch);
+        }
+    });
+}
+
+/// The pixels of one tile: `rows[j][i]` is pixel `(x0 + i, y0 + j)`.
+struct TileView<'a> {
+    index: usize,
+    x0: usize,
+    y0: usize,
+    width: usize,
+    height: usize,
+    rows: Vec<&'a mut [[f32; 3]]>,
+}
+
+/// Triangle indices per tile (compressed rows: `indices[offsets[t]..offsets[t + 1]]`), each
+/// tile's in input order.
+struct Bins {
+    offsets: Vec<usize>,
+    indices: Vec<usize>,
+}
+
+impl Bins {
+    fn build<const N: usize>(
+        positions: &[[f32; 2]],
+        attrs: &[[f32; N]],
+        triangles: &[[u32; 3]],
+        [width, height]: [usize; 2],
+        [tiles_x, tiles_y]: [usize; 2],
+    ) -> Bins {
+        // Pass 1 (parallel): the tile rectangle of every usable triangle.
+        let rects: Vec<Option<[usize; 4]>> = triangles
+            .par_iter()
+            .map(|tri| tile_rect(tri, positions, attrs, [width, height], [tiles_x, tiles_y]))
+            .collect();
+        // Pass 2: count, prefix-sum, fill (a counting sort keeps input order in each tile).
+        let mut offsets = vec![0_usize; tiles_x * tiles_y + 1];
+        for r in rects.iter().flatten() {
+            for ty in r[1]..=r[3] {
+                for tx in r[0]..=r[2] {
+                    offsets[ty * tiles_x + tx + 1] += 1;
+                }
+            }
+        }
+        for t in 0..tiles_x * tiles_y {
+            offsets[t + 1] += offsets[t];
+        }
+        let mut fill = offsets.clone();
+        let mut indices = vec![0_usize; offsets[tiles_x * tiles_y]];
+        for (i, r) in rects.iter().enumerate() {
+            let Some(r) = r else { continue };
+            for ty in r[1]..=r[3] {
+                for tx in r[0]..=r[2] {
+                    let slot = &mut fill[ty * tiles_x + tx];
+                    indices[*slot] = i;
+                    *slot += 1;
+                }
+            }
+        }
+        Bins { offsets, indices }
+    }
+
+    fn tile(&self, t: usize) -> &[usize] {
+        &self.indices[self.offsets[t]..self.offsets[t + 1]]
+    }
+
+    fn tile_is_empty_row(&self, ty: usize, tiles_x: usize) -> bool {
+        self.offsets[ty * tiles_x] == self.offsets[(ty + 1) * tiles_x]
+    }
+}
+
+/// `[tx0, ty0, tx1, ty1]` (inclusive) of the tiles a triangle's bounding box meets, or `None`
+/// for a triangle that is skipped (bad index, non-finite value, zero area, outside the image).
+fn tile_rect<const N: usize>(
+    tri: &[u32; 3],
+    positions: &[[f32; 2]],
+    attrs: &[[f32; N]],
+    [width, height]: [usize; 2],
+    [tiles_x, tiles_y]: [usize; 2],
+) -> Option<[usize; 4]> {
+    let mut p = [[0.0_f64; 2]; 3];
+    for (k, &i) in tri.iter().enumerate() {
+        let i = i as usize;
+        let (pos, attr) = (positions.get(i)?, attrs.get(i)?);
+        if !(pos.iter().all(|v| v.is_finite()) && attr.iter().all(|v| v.is_finite())) {
+            return None;
+        }
+        p[k] = pos.map(f64::from);
+    }
+    let area2 =
+        (p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[2][0] - p[0][0]) * (p[1][1] - p[0][1]);
+    if area2 == 0.0 || !area2.is_finite() {
+        return None;
+    }
+    let xmin = p[0][0].min(p[1][0]).min(p[2][0]).max(0.0);
+    let xmax = p[0][0].max(p[1][0]).max(p[2][0]).min(width as f64);
+    let ymin = p[0][1].min(p[1][1]).min(p[2][1]).max(0.0);
+    let ymax = p[0][1].max(p[1][1]).max(p[2][1]).min(height as f64);
+    if !(xmin < xmax && ymin < ymax) {
+        return None;
+    }
+    let tile = TILE_SIZE as f64;
+    let first = |v: f64, n: usize| ((v / tile).floor() as usize).min(n - 1);
+    let last = |v: f64, n: usize| ((v / tile).ceil() as usize).clamp(1, n) - 1;
+    Some([
+        first(xmin, tiles_x),
+        first(ymin, tiles_y),
+        last(xmax, tiles_x),
+        last(ymax, tiles_y),
+    ])
+}
+
+/// A triangle ready to rasterize in one tile: vertices relative to the tile origin (f64) and
+/// its attribute plane.
+struct Setup<const N: usize> {
+    v: [[f64; 2]; 3],
+    /// Barycentric weights of vertices 1 and 2 as affine functions of the position:
+    /// `w_k(x, y) = bary[k][0] x + bary[k][1] y + bary[k][2]`.
+    bary: [[f64; 3]; 2],
+    /// +1 or −1: the sign that makes the boundary integral `−∮ y dx` of this triangle's
+    /// winding its (positive) area.
+    winding: f64,
+    /// Attributes of vertex 0, and those of vertices 1 and 2 minus those of vertex 0.
+    a0: [f32; N],
+    d1: [f32; N],
+    d2: [f32; N],
+}
+
+impl<const N: usize> Setup<N> {
+    fn new(p: [[f32; 2]; 3], attrs: [[f32; N]; 3], origin: [f64; 2]) -> Setup<N> {
+        let v = p.map(|q| [f64::from(q[0]) - origin[0], f64::from(q[1]) - origin[1]]);
+        let [a, b, c] = v;
+        let (e1, e2) = ([b[0] - a[0], b[1] - a[1]], [c[0] - a[0], c[1] - a[1]]);
+        let area2 = e1[0] * e2[1] - e2[0] * e1[1];
+        // The area was checked non-zero in `tile_rect`; translating very large coordinates
+        // to the tile origin can still round it to 0: then every weight goes to vertex 0.
+        let inv = if (1.0 / area2).is_finite() {
+            1.0 / area2
+        } else {
+            0.0
+        };
+        // w1 = ((p − a) × e2) / area2, w2 = (e1 × (p − a)) / area2.
+        let bary = [
+            [
+                e2[1] * inv,
+                -e2[0] * inv,
+                (e2[0] * a[1] - a[0] * e2[1]) * inv,
+            ],
+            [
+                -e1[1] * inv,
+                e1[0] * inv,
+                (a[0] * e1[1] - e1[0] * a[1]) * inv,
+            ],
+        ];
+        let [a0, a1, a2] = attrs;
+        Setup {
+            v,
+            bary,
+            // −∮ y dx is the shoelace signed area, area2 / 2 (see `add_edge`).
+            winding: if area2 > 0.0 { 1.0 } else { -1.0 },
+            a0,
+            d1: std::array::from_fn(|k| a1[k] - a0[k]),
+            d2: std::array::from_fn(|k| a2[k] - a0[k]),
+        }
+    }
+
+    /// Attributes at `p` (tile coordinates): barycentric weights clamped to the triangle, so
+    /// that rounding can never extrapolate beyond the vertices' values.
+    #[inline]
+    fn interpolate(&self, p: [f64; 2]) -> [f32; N] {
+        let [k1, k2] = &self.bary;
+        let mut w1 = (k1[0] * p[0] + k1[1] * p[1] + k1[2]).clamp(0.0, 1.0);
+        let mut w2 = (k2[0] * p[0] + k2[1] * p[1] + k2[2]).clamp(0.0, 1.0);
+        let s = w1 + w2;
+        if s > 1.0 {
+            w1 /= s;
+            w2 /= s;
+        }
+        let (w1, w2) = (w1 as f32, w2 as f32);
+        std::array::from_fn(|k| self.a0[k] + w1 * self.d1[k] + w2 * self.d2[k])
+    }
+}
+
+/// Scratch reused for every triangle of a tile: clipped polygons and one row of per-column
+/// integrals.
+struct Scratch {
+    cols: Polygon,
+    piece: Polygon,
+    strip: Polygon,
+    tmp: Polygon,
+    /// Per column of the current row: `[∫∫ dA, ∫∫ (x − column) dA, ∫∫ (y − row) dA]`, as
+    /// signed boundary integrals (see [`rasterize_in_tile`]).
+    moments: [[f64; 3]; TILE_SIZE],
+}
+
+impl Scratch {
+    const NEW: Scratch = Scratch {
+        cols: Polygon::EMPTY,
+        piece: Polygon::EMPTY,
+        strip: Polygon::EMPTY,
+        tmp: Polygon::EMPTY,
+        moments: [[0.0; 3]; TILE_SIZE],
+    };
+}
+
+/// Adds one triangle's coverage to the pixels of one tile.
+///
+/// The triangle is clipped to the tile, then to each pixel row (a strip, a convex polygon).
+/// In a strip, the area and first moments of its part in each pixel column come from Green's
+/// theorem, `∫∫ dA = −∮ y dx`, `∫∫ x dA = −∮ x y dx`, `∫∫ y dA = −∮ y²/2 dx`: the column's
+/// vertical sides have `dx = 0`, so each column only needs the pieces of the strip's edges
+/// above it. Each edge is walked column by column and its exact integrals (y is linear along
+/// an edge) are added to those columns; with `y` measured from the row's top, the top edge
+/// contributes nothing. No polygon is cut per pixel.
+fn rasterize_in_tile<const N: usize, F>(
+    view: &mut TileView<'_>,
+    tri: &Setup<N>,
+    shade: &F,
+    s: &mut Scratch,
+) where
+    F: Fn(&[f32; N]) -> [f32; 3],
+{
+    let (tw, th) = (view.width as f64, view.height as f64);
+    let whole = Polygon::triangle(tri.v[0], tri.v[1], tri.v[2]);
+    whole.clip_slab::<0>(0.0, tw, &mut s.cols, &mut s.tmp);
+    s.cols.clip_slab::<1>(0.0, th, &mut s.piece, &mut s.tmp);
+    if s.piece.len < 3 {
+        return;
+    }
+    let [ymin, ymax] = s.piece.range::<1>();
+    let j0 = floor_index(ymin);
+    let j1 = ceil_index(ymax).min(view.height);
+    for j in j0..j1 {
+        let y0 = j as f64;
+        s.piece
+            .clip_slab::<1>(y0, y0 + 1.0, &mut s.strip, &mut s.tmp);
+        if s.strip.len < 3 {
+            continue;
+        }
+        let [xmin, xmax] = s.strip.range::<0>();
+        let i0 = floor_index(xmin);
+        let i1 = ceil_index(xmax).min(view.width);
+        if i0 >= i1 {
+            continue;
+        }
+        let moments = &mut s.moments[i0..i1];
+        moments.fill([0.0; 3]);
+        let strip = s.strip.vertices();
+        let mut p = strip[strip.len() - 1];
+        for &q in strip {
+            add_edge(moments, i0, [p[0], p[1] - y0], [q[0], q[1] - y0]);
+            p = q;
+        }
+        let row = &mut view.rows[j];
+        for (k, m) in moments.iter().enumerate() {
+            // −∮ y dx is the area for one winding and minus it for the other.
+            let area = tri.winding * m[0];
+            #[allow(
+                clippy::neg_cmp_op_on_partial_ord,
+                reason = "`!(area > 0)` also skips NaN"
+            )]
+            if !(area > 0.0) {
+                continue;
+            }
+            let i = i0 + k;
+            // First moments / area, both with the same sign: the centroid, in the pixel.
+            let centroid = [
+                i as f64 + (m[1] / m[0]).clamp(0.0, 1.0),
+                y0 + (m[2] / m[0]).clamp(0.0, 1.0),
+            ];
+            let value = shade(&tri.interpolate(centroid));
+            let area = area as f32;
+            let px = &mut row[i];
+            px[0] += area * value[0];
+            px[1] += area * value[1];
+            px[2] += area * value[2];
+        }
+    }
+}
+
+/// Adds the boundary integrals of the edge `p → q` (x in tile pixels, y from the row's top,
+/// in [0, 1]) to the columns it spans: per column piece `[u, v]` (edge direction) with `y`
+/// linear from `yu` to `yv`, `−∫ y dx = −(v − u)(yu + yv)/2`,
+/// `−∫ (x − c) y dx = −(v − u)((u − c)(2yu + yv) + (v − c)(yu + 2yv))/6`,
+/// `−∫ y²/2 dx = −(v − u)(yu² + yu yv + yv²)/6`, for column `c`.
+#[inline]
+fn add_edge(moments: &mut [[f64; 3]], i0: usize, p: [f64; 2], q: [f64; 2]) {
+    if p[0] == q[0] || (p[1] == 0.0 && q[1] == 0.0) {
+        return; // vertical (dx = 0), or on the row's top (y = 0): contributes nothing
+    }
+    // Walk left to right; `dir` restores the edge's direction.
+    let (a, b, dir) = if p[0] < q[0] {
+        (p, q, -1.0)
+    } else {
+        (q, p, 1.0)
+    };
+    let slope = (b[1] - a[1]) / (b[0] - a[0]);
+    let first = floor_index(a[0]);
+    let last = ceil_index(b[0]).max(first + 1);
+    let mut u = a[0];
+    let mut yu = a[1];
+    for c in first..last {
+        let cf = c as f64;
+        let (v, yv) = if cf + 1.0 >= b[0] {
+            (b[0], b[1])
+        } else {
+            (cf + 1.0, a[1] + (cf + 1.0 - a[0]) * slope)
+        };
+        let dx = dir * (v - u);
+        let (xu, xv) = (u - cf, v - cf);
+        // The edge lies within the strip's columns [i0, i1), as do its ends.
+        if let Some(m) = moments.get_mut(c.wrapping_sub(i0)) {
+            m[0] += dx * (yu + yv) * 0.5;
+            m[1] += dx * (xu * (2.0 * yu + yv) + xv * (yu + 2.0 * yv)) * (1.0 / 6.0);
+            m[2] += dx * (yu * yu + yu * yv + yv * yv) * (1.0 / 6.0);
+        }
+        u = v;
+        yu = yv;
+    }
+}
+
+/// `⌊x⌋` as an index, for `x ≥ 0` (0 for negative or NaN): a truncating cast, since
+/// `f64::floor` is a libm call on baseline x86-64.
+#[inline]
+fn floor_index(x: f64) -> usize {
+    x as usize
+}
+
+/// `⌈x⌉` as an index, for `x ≥ 0` (0 for negative or NaN).
+#[inline]
+fn ceil_index(x: f64) -> usize {
+    let t = x as usize;
+    if (t as f64) < x { t + 1 } else { t }
+}
+
+#[cfg(test)]
+mod tests;
