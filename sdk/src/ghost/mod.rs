@@ -5,11 +5,14 @@
 //! - [`grid`]: a grid of parallel rays traced along one ghost path at one wavelength.
 //! - [`bounds`]: where on the entrance plane the rays that reach the sensor start, per ghost
 //!   and incidence angle (approximate paraxial and precise traced modes).
+//! - [`render`]: one ghost into an HDR image — triangles with energy-conserving intensities,
+//!   the aperture's shape at the stop, feathered clipping, the diffraction-limit caustic bound.
 //! - [`table`]: bounds precomputed over a range of angles, stored and interpolated.
 
 pub mod bounds;
 pub mod enumerate;
 pub mod grid;
+pub mod render;
 pub mod table;
 
 pub use bounds::{GhostBounds, Rect};

@@ -143,7 +143,10 @@ pub fn render_ghost(
         };
         // The aperture's shape clips at the stop (from the recorded crossing), so the grid's
         // radius clip must not clip there a second time.
-        let seq = seq.with_tables_from(&band.tables).aperture_by_mask().cast::<f32>();
+        let seq = seq
+            .with_tables_from(&band.tables)
+            .aperture_by_mask()
+            .cast::<f32>();
         trace_grid(
             &seq,
             light.theta,

@@ -129,7 +129,7 @@ impl BoundsTable {
         }
         if self.bounds.len() != self.ghosts.len()
             || self.bounds.iter().any(|b| b.len() != self.angles_deg.len())
-            || self.angles_deg.windows(2).any(|w| !(w[1] > w[0]))
+            || !self.angles_deg.windows(2).all(|w| w[1] > w[0])
         {
             return Err("the table's ghost and angle lists do not match".into());
         }

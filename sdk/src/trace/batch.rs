@@ -191,8 +191,8 @@ fn step_packet_weighted<T: Real, const MODE: u8, const SHAPE: u8>(
 ) {
     let mut cos = [T::zero(); LANES];
     step_lanes::<T, MODE, SHAPE>(s, p, &mut cos);
-    for i in 0..LANES {
-        p.weight[i] = p.weight[i] * table.at(cos[i]);
+    for (w, &c) in p.weight.iter_mut().zip(&cos) {
+        *w = *w * table.at(c);
     }
 }
 
@@ -203,6 +203,10 @@ fn step_packet<T: Real, const MODE: u8, const SHAPE: u8>(s: &Step<T>, p: &mut Pa
 }
 
 #[inline(always)]
+#[allow(
+    clippy::needless_range_loop,
+    reason = "one index walks eight parallel lane arrays; this shape vectorises"
+)]
 fn step_lanes<T: Real, const MODE: u8, const SHAPE: u8>(
     s: &Step<T>,
     p: &mut Packet<T>,

@@ -1,0 +1,280 @@
+//! Rendering ghosts: analytic plate ghost, symmetry, energy, robustness.
+
+use std::path::Path;
+
+use flarebench_sdk::aperture::Aperture;
+use flarebench_sdk::fresnel;
+use flarebench_sdk::ghost::bounds::{self, GhostBounds};
+use flarebench_sdk::ghost::render::{
+    Band, Frame, GhostContext, GhostLight, GhostScratch, render_ghost,
+};
+use flarebench_sdk::ghost::{GhostPath, GridTrace, enumerate_ghosts};
+use flarebench_sdk::image::HdrImage;
+use flarebench_sdk::io::read_lens;
+use flarebench_sdk::paraxial::stop_opening;
+use flarebench_sdk::trace::InterfaceTableSet;
+use flarebench_sdk::{LensSystem, Medium, Surface};
+
+/// A stop of radius 2 mm, 5 mm of air, a 3 mm plate of n = 1.5, 10 mm of air, the sensor.
+fn plate() -> LensSystem {
+    let mut sys = LensSystem::new(
+        "plate",
+        vec![
+            Surface::stop(5.0, 2.0),
+            Surface::spherical(0.0, 3.0, Medium::Model { nd: 1.5, vd: None }, 10.0),
+            Surface::spherical(0.0, 10.0, Medium::Air, 10.0),
+            Surface::sensor(15.0),
+        ],
+    );
+    sys.film_width_mm = 20.0;
+    sys.film_height_mm = 20.0;
+    sys
+}
+
+fn frame(sys: &LensSystem, px: usize) -> Frame {
+    Frame {
+        width: px,
+        height: px,
+        film_width_mm: sys.film_width_mm,
+        film_height_mm: sys.film_height_mm,
+    }
+}
+
+fn render(
+    sys: &LensSystem,
+    path: GhostPath,
+    theta: f64,
+    n: usize,
+    px: usize,
+    aperture: &Aperture,
+) -> (HdrImage, GhostBounds) {
+    let mut scratch = GridTrace::default();
+    let tables = InterfaceTableSet::for_system(sys, 550.0);
+    let direct = bounds::direct_flux(sys, &tables, theta, &mut scratch);
+    let b = bounds::precise(sys, path, &tables, theta, direct, &mut scratch)
+        .expect("the ghost reaches the sensor");
+    let f = frame(sys, px);
+    let ctx = GhostContext {
+        system: sys,
+        aperture,
+        frame: f,
+        stop_radius: stop_opening(sys),
+        f_number: 2.8,
+    };
+    let light = GhostLight {
+        theta,
+        phi: 0.0,
+        irradiance: 1.0,
+    };
+    let band = Band::new(sys, 550.0, [1.0, 1.0, 1.0]);
+    let mut img = HdrImage::new(px, px);
+    render_ghost(
+        &ctx,
+        path,
+        &b,
+        n,
+        &light,
+        &[band],
+        &mut GhostScratch::default(),
+        &mut img,
+    );
+    (img, b)
+}
+
+fn centroid(img: &HdrImage) -> [f64; 2] {
+    let (mut sx, mut sy, mut s) = (0.0, 0.0, 0.0);
+    for y in 0..img.height {
+        for x in 0..img.width {
+            let v = img.get(x, y).unwrap()[1] as f64;
+            sx += v * (x as f64 + 0.5);
+            sy += v * (y as f64 + 0.5);
+            s += v;
+        }
+    }
+    [sx / s, sy / s]
+}
+
+/// The plate's ghost (reflect at the back face, then the front face) is a copy of the stop's
+/// disc, shifted by 2 t tan θt and dimmed by T R R T: its energy and position are known.
+#[test]
+fn plate_ghost_matches_its_analytic_energy_and_position() {
+    let sys = plate();
+    let path = GhostPath {
+        first: 2,
+        second: 1,
+    };
+    for deg in [0.0f64, 5.0, 15.0] {
+        let theta = deg.to_radians();
+        let (img, _) = render(&sys, path, theta, 64, 400, &Aperture::Circular);
+        assert!(!img.has_non_finite());
+        let n = 1.5;
+        let sin_t = theta.sin() / n;
+        let cos_t = (1.0 - sin_t * sin_t).sqrt();
+        let t_in = 1.0 - fresnel::unpolarised(1.0, n, theta.cos());
+        let r_in = fresnel::unpolarised(n, 1.0, cos_t);
+        let t_out = 1.0 - fresnel::unpolarised(n, 1.0, cos_t);
+        let want = theta.cos() * std::f64::consts::PI * 4.0 * t_in * r_in * r_in * t_out;
+        let got = img.sum()[1];
+        assert!(
+            (got / want - 1.0).abs() < 2e-3,
+            "{deg}°: energy {got} vs {want}"
+        );
+        // Centre: the direct beam's lateral travel plus the two extra passes through the plate.
+        let tan_t = sin_t / cos_t;
+        let y_mm = theta.tan() * 15.0 + 3.0 * 3.0 * tan_t;
+        let f = frame(&sys, 400);
+        let want_px = f.to_pixel(0.0, y_mm);
+        let c = centroid(&img);
+        assert!(
+            (c[0] - want_px[0] as f64).abs() < 0.02,
+            "{deg}°: x {c:?} vs {want_px:?}"
+        );
+        assert!(
+            (c[1] - want_px[1] as f64).abs() < 0.02,
+            "{deg}°: y {c:?} vs {want_px:?}"
+        );
+    }
+}
+
+/// Doubling the grid changes a smooth ghost's image little: the renderer converges.
+#[test]
+fn ghost_images_converge_with_the_grid() {
+    let sys = plate();
+    let path = GhostPath {
+        first: 2,
+        second: 1,
+    };
+    let (a, _) = render(&sys, path, 0.1, 32, 200, &Aperture::Circular);
+    let (b, _) = render(&sys, path, 0.1, 64, 200, &Aperture::Circular);
+    let (c, _) = render(&sys, path, 0.1, 128, 200, &Aperture::Circular);
+    let e1 = a.relative_l1(&c).unwrap();
+    let e2 = b.relative_l1(&c).unwrap();
+    assert!(e2 < e1, "finer grid should be closer: {e1} then {e2}");
+    assert!(e2 < 0.05, "{e2}");
+}
+
+fn lens(stem: &str) -> LensSystem {
+    read_lens(&Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../lenses/{stem}.xml")))
+        .unwrap()
+        .system
+}
+
+/// On the axis every ghost of a rotationally symmetric lens is rotationally symmetric: the
+/// image equals its own transpose (x ↔ y) up to the grid's discretisation.
+#[test]
+fn on_axis_ghosts_are_rotationally_symmetric() {
+    let sys = lens("heliar-tronnier");
+    let mut sq = sys.clone();
+    sq.film_height_mm = sq.film_width_mm;
+    for path in [
+        GhostPath {
+            first: 4,
+            second: 3,
+        },
+        GhostPath {
+            first: 8,
+            second: 1,
+        },
+    ] {
+        let (img, _) = render(&sq, path, 0.0, 64, 160, &Aperture::Circular);
+        let mut t = HdrImage::new(160, 160);
+        for y in 0..160 {
+            for x in 0..160 {
+                *t.get_mut(x, y).unwrap() = img.get(y, x).unwrap();
+            }
+        }
+        let d = t.relative_l1(&img).unwrap();
+        assert!(d < 0.02, "{path}: transpose differs by {d}");
+    }
+}
+
+/// A six-blade iris makes six-fold ghosts: rotating the iris by 60° leaves the image alone,
+/// by 30° changes it.
+#[test]
+fn iris_shape_shows_in_the_ghost() {
+    let sys = plate();
+    let path = GhostPath {
+        first: 2,
+        second: 1,
+    };
+    let iris = |r: f64| Aperture::Iris {
+        blades: 6,
+        rotation_rad: r.to_radians(),
+        roundness: 0.0,
+    };
+    let (a, _) = render(&sys, path, 0.0, 96, 200, &iris(0.0));
+    let (b, _) = render(&sys, path, 0.0, 96, 200, &iris(60.0));
+    let (c, _) = render(&sys, path, 0.0, 96, 200, &iris(30.0));
+    assert!(a.relative_l1(&b).unwrap() < 0.01);
+    assert!(a.relative_l1(&c).unwrap() > 0.05);
+    // The hexagon's area is (3√3/2) r² against π r² for the circle.
+    let (circle, _) = render(&sys, path, 0.0, 96, 200, &Aperture::Circular);
+    let ratio = a.sum()[1] / circle.sum()[1];
+    let want = 1.5 * 3f64.sqrt() / std::f64::consts::PI;
+    assert!((ratio / want - 1.0).abs() < 0.02, "{ratio} vs {want}");
+}
+
+/// Stiff cases never put NaN or Inf into an image: grazing light, a near-flat surface,
+/// a 0.01 mm air gap, every ghost of a real lens.
+#[test]
+fn stiff_cases_stay_finite() {
+    let mut stiff = plate();
+    stiff.surfaces[1].curvature = 1e-7; // R = 1e7 mm
+    stiff.surfaces.insert(
+        3,
+        Surface::spherical(
+            -40.0,
+            2.0,
+            Medium::Model {
+                nd: 1.7,
+                vd: Some(30.0),
+            },
+            10.0,
+        ),
+    );
+    stiff.surfaces[2].thickness = 0.01;
+    stiff.surfaces[3].thickness = 8.0;
+    stiff
+        .surfaces
+        .insert(4, Surface::spherical(60.0, 8.0, Medium::Air, 10.0));
+    stiff.validate().unwrap();
+    let sys_list = [stiff, lens("nikon-zoom-short")];
+    for sys in &sys_list {
+        for deg in [0.0f64, 30.0, 60.0, 89.0] {
+            let theta = deg.to_radians();
+            let mut scratch = GridTrace::default();
+            let tables = InterfaceTableSet::for_system(sys, 550.0);
+            let direct = bounds::direct_flux(sys, &tables, theta, &mut scratch);
+            let f = frame(sys, 96);
+            let ctx = GhostContext {
+                system: sys,
+                aperture: &Aperture::Circular,
+                frame: f,
+                stop_radius: stop_opening(sys),
+                f_number: 2.8,
+            };
+            let light = GhostLight {
+                theta,
+                phi: 0.3,
+                irradiance: 1.0,
+            };
+            let band = Band::new(sys, 450.0, [1.0, 1.0, 1.0]);
+            let mut img = HdrImage::new(96, 96);
+            for path in enumerate_ghosts(sys).into_iter().step_by(7) {
+                if let Some(b) = bounds::precise(sys, path, &tables, theta, direct, &mut scratch) {
+                    render_ghost(
+                        &ctx,
+                        path,
+                        &b,
+                        24,
+                        &light,
+                        std::slice::from_ref(&band),
+                        &mut GhostScratch::default(),
+                        &mut img,
+                    );
+                }
+            }
+            assert!(!img.has_non_finite(), "{} at {deg}°", sys.name);
+        }
+    }
+}
