@@ -232,7 +232,10 @@ impl ApertureSampler<'_> {
     /// See [`Aperture::signed_distance`].
     pub fn signed_distance(&self, u: f32, v: f32) -> f32 {
         match self.shape {
-            Shape::Circle => (f64::from(u).hypot(f64::from(v)) - 1.0) as f32,
+            Shape::Circle => {
+                let (u, v) = (f64::from(u), f64::from(v));
+                ((u * u + v * v).sqrt() - 1.0) as f32
+            }
             Shape::Iris(g) => g.signed_distance(f64::from(u), f64::from(v)) as f32,
             Shape::Mask(m) => m.signed_distance(u, v),
         }

@@ -2,7 +2,7 @@
 //! circular arcs of curvature κ (0 straight, 1 the unit circle) bulging outward.
 //!
 //! Every edge is the same up to rotation and reflection, so a point is folded into the
-//! half-sector between the normal of one edge (the +x axis of the folded frame) and the ray
+//! half-sector between the normal of its nearest edge (the +x axis of the folded frame) and the ray
 //! through its blade tip `V = (a, c)`, `a = cos(π/n)`, `c = sin(π/n)`. Mirroring across
 //! either side of that wedge never brings a boundary point closer, so the distance to the
 //! shape is the distance to that half-edge — exact, inside and outside.
@@ -38,7 +38,17 @@ pub(super) struct IrisGeometry {
     /// √(1 − κ²c²) and the sagitta (module docs).
     w: f64,
     s: f64,
+    /// The first edge's unit normal and the rotation from one edge to the next, (cos, sin):
+    /// folding walks the edges and takes the largest `p·normal` — the nearest edge in angle —
+    /// instead of an `atan2` (when `by_normals`).
+    first_normal: [f64; 2],
+    step: [f64; 2],
+    by_normals: bool,
 }
+
+/// Blade counts up to this fold by walking the edge normals (real irises have 5 to 18
+/// blades); more fold through the polar angle.
+const MAX_WALK: u32 = 64;
 
 impl IrisGeometry {
     /// Out-of-range values are made usable (see `Aperture::validate`).
@@ -59,6 +69,8 @@ impl IrisGeometry {
         let half = PI / n;
         let (c, a) = half.sin_cos();
         let w = (1.0 - kappa * kappa * c * c).sqrt();
+        let (sin0, cos0) = (rotation + half).sin_cos();
+        let (sin_step, cos_step) = (2.0 * half).sin_cos();
         IrisGeometry {
             n,
             rotation,
@@ -69,23 +81,58 @@ impl IrisGeometry {
             kappa,
             w,
             s: kappa * c * c / (1.0 + w),
+            first_normal: [cos0, sin0],
+            step: [cos_step, sin_step],
+            by_normals: blades.max(3) <= MAX_WALK,
         }
+    }
+
+    /// `(u, v)` in the folded frame: x along the nearest edge normal, y ≥ 0 across it.
+    fn fold(&self, u: f64, v: f64) -> (f64, f64) {
+        if self.by_normals {
+            // Rotating the normal step by step accumulates about n ulps: nothing at n ≤ 64.
+            let [cs, ss] = self.step;
+            let mut normal = self.first_normal;
+            let mut best = normal;
+            let mut x = u * normal[0] + v * normal[1];
+            for _ in 1..self.n as u32 {
+                normal = [
+                    normal[0] * cs - normal[1] * ss,
+                    normal[0] * ss + normal[1] * cs,
+                ];
+                let d = u * normal[0] + v * normal[1];
+                if d > x {
+                    x = d;
+                    best = normal;
+                }
+            }
+            (x, (v * best[0] - u * best[1]).abs())
+        } else {
+            self.fold_by_angle(u, v)
+        }
+    }
+
+    /// The same fold through the polar angle (any blade count).
+    fn fold_by_angle(&self, u: f64, v: f64) -> (f64, f64) {
+        let r = (u * u + v * v).sqrt();
+        let psi = (v.atan2(u) - self.rotation).rem_euclid(self.sector);
+        let (sin_t, cos_t) = (psi - self.half).abs().sin_cos();
+        (r * cos_t, r * sin_t)
     }
 
     /// Exact signed distance to the edge (negative inside), normalised units.
     pub(super) fn signed_distance(&self, u: f64, v: f64) -> f64 {
-        let r = u.hypot(v);
-        let psi = (v.atan2(u) - self.rotation).rem_euclid(self.sector);
-        let t = (psi - self.half).abs();
-        let (sin_t, cos_t) = t.sin_cos();
-        let (x, y) = (r * cos_t, r * sin_t);
+        let (x, y) = self.fold(u, v);
         let (a, c, k, w) = (self.a, self.c, self.kappa, self.w);
         let dx = x - a;
+        // Plain square roots rather than `hypot`: the terms are far from overflow and
+        // `hypot` costs several times more.
         if w * y - c * (k * dx + w) > 0.0 {
-            return dx.hypot(y - c);
+            return (dx * dx + (y - c) * (y - c)).sqrt();
         }
         let e = dx - self.s;
-        let kq = (k * dx + w).hypot(k * y);
+        let (kx, ky) = (k * dx + w, k * y);
+        let kq = (kx * kx + ky * ky).sqrt();
         (k * (e * e + y * y) + 2.0 * e) / (kq + 1.0)
     }
 
@@ -110,5 +157,31 @@ impl IrisGeometry {
             g / (k * k)
         };
         polygon + self.n * segment
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn folding_by_normals_equals_folding_by_angle() {
+        for blades in [3u32, 5, 8, 13, 64] {
+            let g = IrisGeometry::new(blades, 0.7, 0.5);
+            assert!(g.by_normals);
+            for i in 0..2000 {
+                let t = i as f64 * 0.0137;
+                let (u, v) = (
+                    1.3 * (t * 1.7).sin() * t.cos(),
+                    1.3 * (t * 0.9).cos() * t.sin(),
+                );
+                let (a, b) = (g.fold(u, v), g.fold_by_angle(u, v));
+                assert!(
+                    (a.0 - b.0).abs() < 1e-12 && (a.1 - b.1).abs() < 1e-12,
+                    "{a:?} {b:?}"
+                );
+            }
+        }
+        assert!(!IrisGeometry::new(65, 0.0, 0.0).by_normals);
     }
 }

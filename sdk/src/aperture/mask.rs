@@ -159,7 +159,8 @@ impl ApertureMask {
         let (tu, tv) = self.texel_size();
         let (eu, ev) = (1.0 - 0.5 * tu, 1.0 - 0.5 * tv);
         let (uc, vc) = (u.clamp(-eu, eu), v.clamp(-ev, ev));
-        let beyond = (u - uc).hypot(v - vc);
+        let (du, dv) = (u - uc, v - vc);
+        let beyond = (du * du + dv * dv).sqrt();
         self.bilinear(&self.distance, uc, vc) + beyond
     }
 
