@@ -5,4 +5,5 @@
 pub mod aperture_file;
 pub mod cli;
 pub mod lens_library;
+pub mod output;
 pub mod table;

@@ -1,0 +1,334 @@
+//! Writing rendered images: OpenEXR (linear, 32-bit float, lossless ZIP) and PNG (tone mapped,
+//! sRGB-encoded, 8 bits per channel), chosen by the file's extension, saved atomically (a
+//! temporary file beside the target, synced, then renamed over it).
+//!
+//! **Tone mapping for PNG** ([`ToneMap`]): each linear channel is multiplied by the exposure
+//! `2^EV`, mapped to [0, 1] by the operator — the ACES filmic fit of Narkowicz (2015),
+//! `f(x) = x (2.51 x + 0.03) / (x (2.43 x + 0.59) + 0.14)` per channel, which rolls bright
+//! ghosts off to white instead of clipping them, or a plain clamp — then encoded with the sRGB
+//! transfer function (IEC 61966-2-1) and rounded to 8 bits. Negative and NaN values become 0.
+//! EXR files keep the linear values exactly.
+
+use std::fs;
+use std::io::{Cursor, Write};
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail, ensure};
+use flarebench_sdk::color::srgb;
+use flarebench_sdk::image::HdrImage;
+
+/// An output file format.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OutputFormat {
+    /// OpenEXR, linear f32 RGB, ZIP compression (lossless).
+    Exr,
+    /// PNG, tone mapped 8-bit sRGB.
+    Png,
+}
+
+impl OutputFormat {
+    /// The format named by `path`'s extension (`.exr` or `.png`, any case).
+    pub fn from_path(path: &Path) -> Result<OutputFormat> {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        match ext.as_deref() {
+            Some("exr") => Ok(OutputFormat::Exr),
+            Some("png") => Ok(OutputFormat::Png),
+            _ => bail!(
+                "`{}`: unknown image extension; use .exr (linear HDR) or .png (tone mapped)",
+                path.display()
+            ),
+        }
+    }
+}
+
+/// The curve that maps exposed linear values to [0, 1] for PNG.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum ToneOperator {
+    /// Narkowicz's ACES filmic fit, per channel (highlights roll off to white).
+    #[default]
+    Aces,
+    /// Clamp to [0, 1] (linear; exact values below 1).
+    Clamp,
+}
+
+/// How a linear HDR image becomes an 8-bit PNG.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ToneMap {
+    /// Exposure in stops: linear values are multiplied by `2^exposure_ev` first.
+    pub exposure_ev: f32,
+    /// The tone curve.
+    pub operator: ToneOperator,
+}
+
+impl Default for ToneMap {
+    fn default() -> Self {
+        ToneMap {
+            exposure_ev: 0.0,
+            operator: ToneOperator::Aces,
+        }
+    }
+}
+
+impl ToneMap {
+    /// One channel: exposure, tone curve, sRGB encoding, 8 bits.
+    pub fn map_channel(&self, linear: f32) -> u8 {
+        let x = linear * self.exposure_ev.exp2();
+        // NaN and negatives become 0 here (`max` returns the non-NaN operand).
+        let x = x.max(0.0);
+        let y = match self.operator {
+            ToneOperator::Aces => (x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14),
+            ToneOperator::Clamp => x,
+        };
+        // `encode` clamps to [0, 1]; +∞ maps to NaN in the ACES ratio and then to 0, so
+        // treat it first.
+        let y = if x.is_infinite() { 1.0 } else { y };
+        (srgb::encode(y) * 255.0).round() as u8
+    }
+}
+
+/// Saves `img` to `path` as EXR or PNG (by extension), atomically.
+pub fn save_image(img: &HdrImage, path: &Path, tone: &ToneMap) -> Result<()> {
+    let bytes = match OutputFormat::from_path(path)? {
+        OutputFormat::Exr => encode_exr(img),
+        OutputFormat::Png => encode_png(img, tone),
+    }
+    .with_context(|| format!("could not encode `{}`", path.display()))?;
+    write_atomically(path, &bytes).with_context(|| format!("could not write `{}`", path.display()))
+}
+
+/// The image as an OpenEXR file in memory: one layer, channels R, G, B as f32, ZIP
+/// compression in blocks of 16 scan lines (lossless).
+pub fn encode_exr(img: &HdrImage) -> Result<Vec<u8>> {
+    use exr::prelude::*;
+    check_size(img)?;
+    let width = img.width;
+    let pixels = &img.pixels;
+    let layer = Layer::new(
+        (img.width, img.height),
+        LayerAttributes::named("flarebench"),
+        Encoding::SMALL_LOSSLESS,
+        SpecificChannels::rgb(|pos: Vec2<usize>| {
+            let p = pixels[pos.y() * width + pos.x()];
+            (p[0], p[1], p[2])
+        }),
+    );
+    let mut bytes = Cursor::new(Vec::new());
+    Image::from_layer(layer)
+        .write()
+        .to_buffered(&mut bytes)
+        .map_err(|e| anyhow::anyhow!("EXR encoder: {e}"))?;
+    Ok(bytes.into_inner())
+}
+
+/// The image tone mapped to an 8-bit sRGB PNG in memory.
+pub fn encode_png(img: &HdrImage, tone: &ToneMap) -> Result<Vec<u8>> {
+    check_size(img)?;
+    let raw: Vec<u8> = img
+        .pixels
+        .iter()
+        .flat_map(|p| p.map(|c| tone.map_channel(c)))
+        .collect();
+    let rgb = image::RgbImage::from_raw(img.width as u32, img.height as u32, raw)
+        .context("pixel buffer does not match the image size")?;
+    let mut bytes = Cursor::new(Vec::new());
+    rgb.write_to(&mut bytes, image::ImageFormat::Png)
+        .context("PNG encoder")?;
+    Ok(bytes.into_inner())
+}
+
+/// Reads the first RGB(A) layer of an OpenEXR file as a linear image (alpha ignored; f16 and
+/// u32 channels are converted to f32).
+pub fn read_exr(path: &Path) -> Result<HdrImage> {
+    let image = exr::prelude::read_first_rgba_layer_from_file(
+        path,
+        |size, _| HdrImage::new(size.width(), size.height()),
+        |img: &mut HdrImage, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+            let w = img.width;
+            img.pixels[pos.y() * w + pos.x()] = [r, g, b];
+        },
+    )
+    .map_err(|e| anyhow::anyhow!("{e}"))
+    .with_context(|| format!("could not read OpenEXR image `{}`", path.display()))?;
+    Ok(image.layer_data.channel_data.pixels)
+}
+
+fn check_size(img: &HdrImage) -> Result<()> {
+    ensure!(
+        img.width > 0 && img.height > 0,
+        "cannot write an empty {}×{} image",
+        img.width,
+        img.height
+    );
+    ensure!(
+        u32::try_from(img.width).is_ok() && u32::try_from(img.height).is_ok(),
+        "image {}×{} is too large to save",
+        img.width,
+        img.height
+    );
+    ensure!(
+        img.pixels.len() == img.width * img.height,
+        "image has {} pixels for {}×{}",
+        img.pixels.len(),
+        img.width,
+        img.height
+    );
+    Ok(())
+}
+
+/// Writes `bytes` to `path` through a temporary file in the same directory (created new,
+/// synced, renamed over the target); the temporary is removed on failure.
+fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let tmp = temp_path(path)?;
+    let result = (|| {
+        let mut f = fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        drop(f);
+        fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = fs::remove_file(&tmp);
+    }
+    result
+}
+
+/// `.<name>.<pid>.<n>.tmp` beside the target.
+fn temp_path(path: &Path) -> std::io::Result<PathBuf> {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let name = path.file_name().ok_or_else(|| {
+        std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            format!("`{}` does not name a file", path.display()),
+        )
+    })?;
+    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+    let tmp_name = format!(".{}.{}.{n}.tmp", name.to_string_lossy(), std::process::id());
+    Ok(path.with_file_name(tmp_name))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn temp_dir(tag: &str) -> PathBuf {
+        let dir =
+            std::env::temp_dir().join(format!("flarebench-output-{tag}-{}", std::process::id()));
+        fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    /// Values that stress f32: tiny, huge, negative, subnormal, non-round.
+    fn test_image() -> HdrImage {
+        let (w, h) = (37, 23);
+        let pixels = (0..w * h)
+            .map(|i| {
+                let t = i as f32;
+                [
+                    t * 0.123_456_7 + 1e-7,
+                    (t * 0.37).sin() * 1e4,
+                    if i % 7 == 0 {
+                        -2.5e-3
+                    } else {
+                        f32::MIN_POSITIVE / 3.0 * t
+                    },
+                ]
+            })
+            .collect();
+        HdrImage::from_pixels(w, h, pixels).unwrap()
+    }
+
+    #[test]
+    fn exr_round_trips_f32_exactly() {
+        let dir = temp_dir("exr");
+        let path = dir.join("flare.exr");
+        let img = test_image();
+        save_image(&img, &path, &ToneMap::default()).unwrap();
+        let back = read_exr(&path).unwrap();
+        assert_eq!((back.width, back.height), (img.width, img.height));
+        for (a, b) in img.pixels.iter().zip(&back.pixels) {
+            assert_eq!(a.map(f32::to_bits), b.map(f32::to_bits));
+        }
+        // Saving again replaces the file and leaves no temporary behind.
+        save_image(&img, &path, &ToneMap::default()).unwrap();
+        let names: Vec<_> = fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(names, vec![std::ffi::OsString::from("flare.exr")]);
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn png_is_tone_mapped_srgb() {
+        let dir = temp_dir("png");
+        let path = dir.join("flare.PNG");
+        let pixels = vec![
+            [0.0, 0.18, 1.0],
+            [1e9, -1.0, f32::NAN],
+            [0.5, 0.002, f32::INFINITY],
+        ];
+        let img = HdrImage::from_pixels(3, 1, pixels).unwrap();
+        let clamp = ToneMap {
+            exposure_ev: 0.0,
+            operator: ToneOperator::Clamp,
+        };
+        save_image(&img, &path, &clamp).unwrap();
+        let back = image::open(&path).unwrap().to_rgb8();
+        assert_eq!((back.width(), back.height()), (3, 1));
+        // Clamp + sRGB: 0.18 → 0.4614 → 118; 0.5 → 0.7354 → 188; 0.002 → 0.02584 → 7.
+        assert_eq!(back.get_pixel(0, 0).0, [0, 118, 255]);
+        assert_eq!(back.get_pixel(1, 0).0, [255, 0, 0]);
+        assert_eq!(back.get_pixel(2, 0).0, [188, 7, 255]);
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn aces_rolls_off_and_exposure_scales() {
+        let aces = ToneMap::default();
+        // f(0.18) = 0.18 (2.51·0.18 + 0.03) / (0.18 (2.43·0.18 + 0.59) + 0.14) = 0.2669
+        // → sRGB 0.5535 → 141.1 → 141.
+        assert_eq!(aces.map_channel(0.18), 141);
+        // The fit saturates: f(∞) = 2.51 / 2.43 > 1, clamped to 255 from about x = 10.
+        assert_eq!(aces.map_channel(100.0), 255);
+        assert!(aces.map_channel(1.0) < 255 && aces.map_channel(1.0) > 200);
+        assert_eq!(aces.map_channel(f32::INFINITY), 255);
+        assert_eq!(aces.map_channel(f32::NAN), 0);
+        assert_eq!(aces.map_channel(-3.0), 0);
+        let plus_one = ToneMap {
+            exposure_ev: 1.0,
+            operator: ToneOperator::Clamp,
+        };
+        let clamp = ToneMap {
+            exposure_ev: 0.0,
+            operator: ToneOperator::Clamp,
+        };
+        assert_eq!(plus_one.map_channel(0.09), clamp.map_channel(0.18));
+    }
+
+    #[test]
+    fn the_extension_picks_the_format_and_bad_ones_are_errors() {
+        assert_eq!(
+            OutputFormat::from_path(Path::new("a/b.EXR")).unwrap(),
+            OutputFormat::Exr
+        );
+        assert_eq!(
+            OutputFormat::from_path(Path::new("b.png")).unwrap(),
+            OutputFormat::Png
+        );
+        let err = save_image(&test_image(), Path::new("out.jpg"), &ToneMap::default());
+        assert!(format!("{:#}", err.unwrap_err()).contains("unknown image extension"));
+        let empty = HdrImage::new(0, 3);
+        assert!(encode_exr(&empty).is_err());
+        assert!(encode_png(&empty, &ToneMap::default()).is_err());
+        let missing = Path::new("/nonexistent-flarebench-dir/x.exr");
+        assert!(save_image(&test_image(), missing, &ToneMap::default()).is_err());
+        assert!(read_exr(missing).is_err());
+    }
+}
