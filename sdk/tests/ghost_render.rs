@@ -74,7 +74,7 @@ fn render(
         &b,
         n,
         &light,
-        &[band],
+        &[band.as_ref()],
         &mut GhostScratch::default(),
         &mut img,
     );
@@ -268,7 +268,7 @@ fn stiff_cases_stay_finite() {
                         &b,
                         24,
                         &light,
-                        std::slice::from_ref(&band),
+                        &[band.as_ref()],
                         &mut GhostScratch::default(),
                         &mut img,
                     );

@@ -74,6 +74,24 @@ impl Band {
             tables: InterfaceTableSet::for_system(system, lambda_nm),
         }
     }
+
+    /// The band as the renderer takes it.
+    pub fn as_ref(&self) -> BandRef<'_> {
+        BandRef {
+            lambda_nm: self.lambda_nm,
+            rgb: self.rgb,
+            tables: &self.tables,
+        }
+    }
+}
+
+/// A band to trace: wavelength, colour, and the lens's interface tables at that wavelength
+/// (shared between ghosts; the colour may be a ghost's own).
+#[derive(Clone, Copy, Debug)]
+pub struct BandRef<'a> {
+    pub lambda_nm: f64,
+    pub rgb: [f32; 3],
+    pub tables: &'a InterfaceTableSet,
 }
 
 /// A collimated light as the ghost renderer sees it.
@@ -127,7 +145,7 @@ pub fn render_ghost(
     bounds: &GhostBounds,
     n: usize,
     light: &GhostLight,
-    bands: &[Band],
+    bands: &[BandRef<'_>],
     scratch: &mut GhostScratch,
     img: &mut HdrImage,
 ) -> GhostStats {
@@ -144,7 +162,7 @@ pub fn render_ghost(
         // The aperture's shape clips at the stop (from the recorded crossing), so the grid's
         // radius clip must not clip there a second time.
         let seq = seq
-            .with_tables_from(&band.tables)
+            .with_tables_from(band.tables)
             .aperture_by_mask()
             .cast::<f32>();
         trace_grid(

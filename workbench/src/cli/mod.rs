@@ -3,6 +3,7 @@
 mod convert;
 mod info;
 mod precompute;
+mod render;
 mod trace;
 
 use std::process::ExitCode;
@@ -26,6 +27,8 @@ pub enum Command {
     Info(info::InfoArgs),
     /// Precompute ghost bounds over a range of incidence angles (for `render --precomputed`).
     Precompute(precompute::PrecomputeArgs),
+    /// Render the ghost flares of a lens for one or more lights to an HDR image.
+    Render(render::RenderArgs),
     /// Trace one collimated ray through a lens and show every surface it meets.
     Trace(trace::TraceArgs),
     /// Read a lens file (.xml, Zemax .zmx, PBRT .dat) and write it as flarebench XML.
@@ -38,6 +41,7 @@ pub fn main() -> ExitCode {
     let result = match &cli.command {
         Command::Info(a) => info::run(a, cli.quiet),
         Command::Trace(a) => trace::run(a, cli.quiet),
+        Command::Render(a) => render::run(a, cli.quiet),
         Command::Precompute(a) => precompute::run(a, cli.quiet),
         Command::Convert(a) => convert::run(a, cli.quiet),
     };

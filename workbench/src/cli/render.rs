@@ -1,0 +1,247 @@
+//! `flarebench render`: ghost flares of a lens for one or more lights, to EXR or PNG.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::Context;
+use clap::Args;
+use flarebench_sdk::aperture::Aperture;
+use flarebench_sdk::ghost::render::Frame;
+
+use crate::flare::plan::PlanOptions;
+use crate::flare::report::{ErrorReport, LightReport, RenderReport, Timings};
+use crate::flare::scene::{LightSpec, Quality};
+use crate::flare::{ghosts, plan};
+use crate::lens_library;
+use crate::output::{ToneMap, ToneOperator, save_image};
+use flarebench_sdk::ghost::table::BoundsTable;
+
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// Lens file or the name of a bundled lens.
+    pub lens: String,
+    /// A light at infinity: THETA,PHI[,INTENSITY[,KELVIN]] — angle to the axis and azimuth in
+    /// degrees, irradiance (default 1), blackbody temperature (default: daylight D65).
+    /// Repeat for several lights.
+    #[arg(long = "light", required = true, value_parser = LightSpec::parse)]
+    pub lights: Vec<LightSpec>,
+    /// Output size in pixels, WxH. The frame spans the film's width; its height follows the
+    /// aspect ratio.
+    #[arg(long, default_value = "1920x1080", value_parser = parse_size)]
+    pub size: (usize, usize),
+    #[arg(long, value_enum, default_value_t = Quality::Default)]
+    pub quality: Quality,
+    /// Iris blade count (0: a circular stop).
+    #[arg(long, default_value_t = 0)]
+    pub iris_blades: u32,
+    /// Iris rotation (degrees).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub iris_rotation_deg: f64,
+    /// Blade roundness, 0 (straight) to 1 (a circle).
+    #[arg(long, default_value_t = 0.0)]
+    pub iris_roundness: f64,
+    /// Ghost bounds from `flarebench precompute` (else traced for each light).
+    #[arg(long)]
+    pub precomputed: Option<PathBuf>,
+    /// Also render the dense reference and report the error against it.
+    #[arg(long)]
+    pub reference: bool,
+    /// Output image: .exr (linear, float) or .png (tone mapped).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// PNG exposure in stops; default: automatic, so the brightest 0.1% of the flare's pixels
+    /// reach white.
+    #[arg(long, allow_negative_numbers = true)]
+    pub exposure_ev: Option<f32>,
+    /// PNG tone curve.
+    #[arg(long, value_enum, default_value_t = ToneOperator::Aces)]
+    pub tone: ToneOperator,
+    /// Print the report (time per stage, ghosts traced and left out, energies).
+    #[arg(long)]
+    pub report: bool,
+    /// Print the report as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+}
+
+fn parse_size(s: &str) -> Result<(usize, usize), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("size `{s}` is not WxH"))?;
+    let w: usize = w
+        .trim()
+        .parse()
+        .map_err(|_| format!("width `{w}` is not a whole number"))?;
+    let h: usize = h
+        .trim()
+        .parse()
+        .map_err(|_| format!("height `{h}` is not a whole number"))?;
+    if !(1..=16384).contains(&w) || !(1..=16384).contains(&h) {
+        return Err(format!(
+            "size {w}x{h} must be between 1 and 16384 pixels per side"
+        ));
+    }
+    Ok((w, h))
+}
+
+fn ms(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
+}
+
+pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
+    let t_load = Instant::now();
+    let loaded = lens_library::load(&args.lens, quiet || args.json)?;
+    let sys = &loaded.system;
+    let mut timings = Timings::default();
+    let (w, h) = args.size;
+    let frame = Frame {
+        width: w,
+        height: h,
+        film_width_mm: sys.film_width_mm,
+        film_height_mm: sys.film_width_mm * h as f64 / w as f64,
+    };
+    let aperture = if args.iris_blades == 0 {
+        Aperture::Circular
+    } else {
+        Aperture::Iris {
+            blades: args.iris_blades,
+            rotation_rad: args.iris_rotation_deg.to_radians(),
+            roundness: args.iris_roundness,
+        }
+    };
+    aperture.validate().context("iris")?;
+
+    let table = match &args.precomputed {
+        Some(p) => {
+            let text = std::fs::read_to_string(p)
+                .with_context(|| format!("could not read {}", p.display()))?;
+            let table: BoundsTable = serde_json::from_str(&text)
+                .with_context(|| format!("{} is not a ghost bounds file", p.display()))?;
+            table
+                .check_for(sys)
+                .map_err(anyhow::Error::msg)
+                .with_context(|| p.display().to_string())?;
+            Some(table)
+        }
+        None => None,
+    };
+    timings.load_ms = ms(t_load);
+
+    let t = Instant::now();
+    let q = args.quality;
+    let opts = PlanOptions {
+        quality: q,
+        bands: q.bands(),
+        cull: true,
+        grid_scale: q.grid_scale(),
+        precomputed: table.as_ref(),
+        all_bands: false,
+    };
+    let plans = plan::plan(sys, &args.lights, &frame, &opts)?;
+    timings.plan_ms = ms(t);
+
+    let t = Instant::now();
+    let (img, stats) = ghosts::render(sys, &aperture, frame, &plans)?;
+    timings.render_ms = ms(t);
+    anyhow::ensure!(
+        !img.has_non_finite(),
+        "internal error: the image has non-finite pixels"
+    );
+
+    let error = if args.reference {
+        let t = Instant::now();
+        let reference = reference_image(sys, &aperture, frame, &args.lights)?;
+        timings.reference_ms = Some(ms(t));
+        let c = img.compare(&reference)?;
+        Some(ErrorReport {
+            relative_rmse: c.relative_rmse,
+            relative_l1: c.relative_l1,
+            energy_error: c.energy_error,
+        })
+    } else {
+        None
+    };
+
+    let t = Instant::now();
+    let exposure_ev = args.exposure_ev.unwrap_or_else(|| auto_exposure(&img));
+    let tone = ToneMap {
+        exposure_ev,
+        operator: args.tone,
+    };
+    save_image(&img, &args.output, &tone)?;
+    timings.write_ms = ms(t);
+
+    let lights: Vec<LightReport> = plans
+        .iter()
+        .zip(&stats)
+        .map(|(lp, s)| LightReport::new(lp, s))
+        .collect();
+    let report = RenderReport {
+        lens: sys.name.clone(),
+        width: w,
+        height: h,
+        quality: q,
+        output: args.output.display().to_string(),
+        timings,
+        rays_traced: stats.iter().flatten().map(|s| s.rays).sum(),
+        triangles: stats.iter().flatten().map(|s| s.triangles).sum(),
+        image_sum_rgb: img.sum(),
+        image_max: img.max(),
+        exposure_ev,
+        lights,
+        error,
+    };
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else if args.report {
+        print!("{}", report.text());
+    } else if !quiet {
+        eprintln!("wrote {}", args.output.display());
+    }
+    Ok(())
+}
+
+/// The reference: every ghost that has light, 31 bands, grids four times finer (at least 96).
+pub fn reference_image(
+    sys: &flarebench_sdk::LensSystem,
+    aperture: &Aperture,
+    frame: Frame,
+    lights: &[LightSpec],
+) -> anyhow::Result<flarebench_sdk::image::HdrImage> {
+    let opts = PlanOptions {
+        quality: Quality::High,
+        bands: REFERENCE_BANDS,
+        cull: false,
+        grid_scale: 4.0,
+        precomputed: None,
+        all_bands: true,
+    };
+    let mut plans = plan::plan(sys, lights, &frame, &opts)?;
+    for lp in &mut plans {
+        for g in &mut lp.ghosts {
+            g.grid = g.grid.max(REFERENCE_MIN_GRID);
+        }
+    }
+    Ok(ghosts::render(sys, aperture, frame, &plans)?.0)
+}
+
+/// Exposure (stops) that maps the 99.9th percentile of the lit pixels' luminance to 1;
+/// 0 for an empty image.
+fn auto_exposure(img: &flarebench_sdk::image::HdrImage) -> f32 {
+    let mut lum: Vec<f32> = img
+        .pixels
+        .iter()
+        .map(|p| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2])
+        .filter(|&l| l > 0.0)
+        .collect();
+    if lum.is_empty() {
+        return 0.0;
+    }
+    let k = ((lum.len() as f64 * 0.999) as usize).min(lum.len() - 1);
+    let (_, &mut p, _) = lum.select_nth_unstable_by(k, f32::total_cmp);
+    -p.log2()
+}
+
+/// Bands and smallest grid of the reference renderer.
+pub const REFERENCE_BANDS: usize = 31;
+pub const REFERENCE_MIN_GRID: usize = 96;

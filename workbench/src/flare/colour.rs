@@ -1,0 +1,174 @@
+//! A ghost's colour. Coatings make each ghost's throughput vary steeply with wavelength (a
+//! quarter-wave layer reflects least at its design wavelength and more toward the blue), so a
+//! few traced bands would alias it. The renderer traces a ghost's geometry at a few bands, and
+//! each band's colour is the integral over its wavelength bin, in 5 nm steps, of the light's
+//! colour weights times the ghost's throughput at normal incidence, relative to the
+//! throughput at the band's own wavelength.
+
+use flarebench_sdk::LensSystem;
+use flarebench_sdk::color::{LightSpectrum, SpectralSampling};
+use flarebench_sdk::ghost::GhostPath;
+use flarebench_sdk::system::SurfaceKind;
+
+/// Fine wavelength steps the colours are integrated over (5 nm over 380–780 nm).
+const FINE_BANDS: usize = 80;
+
+/// Normal-incidence factors of every surface at one wavelength:
+/// `[T forward, R forward, T backward, R backward]` (1, 0, 1, 0 where nothing reflects).
+fn surface_factors(system: &LensSystem, lambda_nm: f64) -> Vec<[f64; 4]> {
+    let n = system.indices(lambda_nm);
+    system
+        .surfaces
+        .iter()
+        .enumerate()
+        .map(|(i, s)| {
+            if s.kind != SurfaceKind::Refracting || n[i] == n[i + 1] {
+                return [1.0, 0.0, 1.0, 0.0];
+            }
+            let rf = s.coating.reflectance(n[i], n[i + 1], 1.0, lambda_nm, true);
+            let rb = s.coating.reflectance(n[i + 1], n[i], 1.0, lambda_nm, false);
+            [1.0 - rf, rf, 1.0 - rb, rb]
+        })
+        .collect()
+}
+
+/// Throughput of a ghost path at normal incidence from per-surface factors.
+fn path_throughput(path: GhostPath, f: &[[f64; 4]], sensor: usize) -> f64 {
+    let mut t = 1.0;
+    for s in 0..path.first {
+        t *= f[s][0];
+    }
+    t *= f[path.first][1];
+    for s in (path.second + 1..path.first).rev() {
+        t *= f[s][2];
+    }
+    t *= f[path.second][3];
+    for s in path.second + 1..sensor {
+        t *= f[s][0];
+    }
+    t
+}
+
+/// Per-wavelength data for colouring every ghost of a lens under one light.
+#[derive(Debug)]
+pub struct GhostColours {
+    /// Fine wavelengths, their colour weights (for the light) and the surface factors there.
+    fine: Vec<(f64, [f32; 3], Vec<[f64; 4]>)>,
+    /// Surface factors at each traced band's wavelength.
+    band_factors: Vec<Vec<[f64; 4]>>,
+    /// Band edges (nm): band k covers `[edges[k], edges[k + 1])`.
+    edges: Vec<f64>,
+    sensor: usize,
+    /// The light's intensity, scaling every colour.
+    intensity: f32,
+}
+
+impl GhostColours {
+    /// For `system` under `light`, with traced bands at `band_lambdas` (stratified over
+    /// 380–780 nm, as [`SpectralSampling`] places them). `intensity` scales every colour.
+    pub fn new(
+        system: &LensSystem,
+        light: LightSpectrum,
+        band_lambdas: &[f64],
+        intensity: f32,
+    ) -> anyhow::Result<Self> {
+        let fine = SpectralSampling::new(FINE_BANDS, light)?;
+        let k = band_lambdas.len();
+        let width = 400.0 / k as f64;
+        Ok(GhostColours {
+            fine: fine
+                .wavelengths_nm()
+                .iter()
+                .zip(fine.weights())
+                .map(|(&l, &w)| (l, w, surface_factors(system, l)))
+                .collect(),
+            band_factors: band_lambdas
+                .iter()
+                .map(|&l| surface_factors(system, l))
+                .collect(),
+            edges: (0..=k).map(|i| 380.0 + width * i as f64).collect(),
+            sensor: system.sensor_index(),
+            intensity,
+        })
+    }
+
+    /// The colour of each traced band for `path`: Σ over the band's fine steps of
+    /// weight · T(λ) / T(λ_band).
+    pub fn band_colours(&self, path: GhostPath) -> Vec<[f32; 3]> {
+        (0..self.band_factors.len())
+            .map(|k| {
+                let t_band = path_throughput(path, &self.band_factors[k], self.sensor);
+                let in_bin = |l: f64| l >= self.edges[k] && l < self.edges[k + 1];
+                self.sum(path, t_band, in_bin)
+            })
+            .collect()
+    }
+
+    /// The colour of the whole spectrum traced once at a wavelength whose factors are those of
+    /// band `k`.
+    pub fn merged_colour(&self, path: GhostPath, k: usize) -> [f32; 3] {
+        let t_band = path_throughput(path, &self.band_factors[k], self.sensor);
+        self.sum(path, t_band, |_| true)
+    }
+
+    fn sum(&self, path: GhostPath, t_band: f64, keep: impl Fn(f64) -> bool) -> [f32; 3] {
+        if !(t_band > 0.0) {
+            return [0.0; 3];
+        }
+        let mut c = [0f32; 3];
+        for (l, w, f) in &self.fine {
+            if keep(*l) {
+                let r = (path_throughput(path, f, self.sensor) / t_band) as f32 * self.intensity;
+                for i in 0..3 {
+                    c[i] += w[i] * r;
+                }
+            }
+        }
+        c
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use flarebench_sdk::{Coating, Medium, Surface};
+
+    /// Without coatings or dispersion a ghost's throughput is the same at every wavelength, so
+    /// the band colours are the light's own colour split by bands and sum to it.
+    #[test]
+    fn flat_throughput_gives_the_light_colour() {
+        let mut sys = LensSystem::new(
+            "plate",
+            vec![
+                Surface::stop(1.0, 5.0),
+                Surface::spherical(0.0, 2.0, Medium::Model { nd: 1.5, vd: None }, 8.0),
+                Surface::spherical(0.0, 5.0, Medium::Air, 8.0),
+                Surface::sensor(10.0),
+            ],
+        );
+        let path = GhostPath {
+            first: 2,
+            second: 1,
+        };
+        let c = GhostColours::new(&sys, LightSpectrum::D65, &[450.0, 550.0, 650.0], 1.0).unwrap();
+        let bands = c.band_colours(path);
+        let total: [f32; 3] = bands
+            .iter()
+            .fold([0.0; 3], |a, b| [a[0] + b[0], a[1] + b[1], a[2] + b[2]]);
+        for ch in total {
+            assert!((ch - 1.0).abs() < 1e-3, "{total:?}");
+        }
+        let m = c.merged_colour(path, 1);
+        assert!((0..3).all(|i| (m[i] - total[i]).abs() < 1e-5), "{m:?} vs {total:?}");
+        // A red-tuned quarter-wave coating makes the ghost blue.
+        for s in &mut sys.surfaces[1..3] {
+            s.coating = Coating::SingleLayer {
+                design_wavelength_nm: 620.0,
+                index: 1.38,
+            };
+        }
+        let c = GhostColours::new(&sys, LightSpectrum::D65, &[450.0, 550.0, 650.0], 1.0).unwrap();
+        let m = c.merged_colour(path, 1);
+        assert!(m[2] > m[0] && m[2] > 1.0, "{m:?}");
+    }
+}

@@ -1,0 +1,105 @@
+//! Carrying out a plan: every planned ghost of every light rendered into one linear HDR
+//! image, ghosts spread over the cores.
+
+use flarebench_sdk::LensSystem;
+use flarebench_sdk::aperture::Aperture;
+use flarebench_sdk::ghost::render::{
+    BandRef, Frame, GhostContext, GhostLight, GhostScratch, GhostStats, render_ghost,
+};
+use flarebench_sdk::image::HdrImage;
+use flarebench_sdk::paraxial::{analyse, stop_opening};
+use flarebench_sdk::spectrum::LAMBDA_D_NM;
+use rayon::prelude::*;
+
+use super::plan::LightPlan;
+
+/// Renders every planned ghost; returns the image and, per light, each ghost's statistics in
+/// plan order.
+pub fn render(
+    system: &LensSystem,
+    aperture: &Aperture,
+    frame: Frame,
+    plans: &[LightPlan],
+) -> anyhow::Result<(HdrImage, Vec<Vec<GhostStats>>)> {
+    let p = analyse(system, LAMBDA_D_NM)?;
+    let ctx = GhostContext {
+        system,
+        aperture,
+        frame,
+        stop_radius: stop_opening(system),
+        f_number: p.f_number,
+    };
+    let jobs: Vec<(usize, usize)> = plans
+        .iter()
+        .enumerate()
+        .flat_map(|(l, lp)| (0..lp.ghosts.len()).map(move |g| (l, g)))
+        .collect();
+    // One accumulator image per chunk of jobs: few chunks, so few full-size images.
+    let chunk = (jobs.len() / (4 * rayon::current_num_threads())).max(1);
+    let (img, mut stats) = jobs
+        .par_iter()
+        .with_min_len(chunk)
+        .fold(
+            || {
+                (
+                    HdrImage::new(frame.width, frame.height),
+                    Vec::new(),
+                    GhostScratch::default(),
+                )
+            },
+            |(mut img, mut stats, mut scratch), &(l, g)| {
+                let lp = &plans[l];
+                let job = &lp.ghosts[g];
+                let light = GhostLight {
+                    theta: lp.light.theta_deg.to_radians(),
+                    phi: lp.light.phi_deg.to_radians(),
+                    irradiance: 1.0,
+                };
+                // A spectral ghost traces every band; another traces the merged band in its
+                // own colour.
+                let bands: Vec<BandRef<'_>> = if job.spectral {
+                    lp.bands
+                        .iter()
+                        .zip(&job.band_rgb)
+                        .map(|(b, &rgb)| BandRef { rgb, ..b.as_ref() })
+                        .collect()
+                } else {
+                    vec![BandRef {
+                        rgb: job.band_rgb[0],
+                        ..lp.merged.as_ref()
+                    }]
+                };
+                let s = render_ghost(
+                    &ctx,
+                    job.path,
+                    &job.bounds,
+                    job.grid,
+                    &light,
+                    &bands,
+                    &mut scratch,
+                    &mut img,
+                );
+                stats.push((l, g, s));
+                (img, stats, scratch)
+            },
+        )
+        .map(|(img, stats, _)| (img, stats))
+        .reduce(
+            || (HdrImage::new(frame.width, frame.height), Vec::new()),
+            |(mut a, mut sa), (b, sb)| {
+                a.add_image(&b)
+                    .expect("every accumulator has the frame's size");
+                sa.extend(sb);
+                (a, sa)
+            },
+        );
+    stats.sort_by_key(|&(l, g, _)| (l, g));
+    let mut per_light: Vec<Vec<GhostStats>> = plans
+        .iter()
+        .map(|lp| vec![GhostStats::default(); lp.ghosts.len()])
+        .collect();
+    for (l, g, s) in stats {
+        per_light[l][g] = s;
+    }
+    Ok((img, per_light))
+}

@@ -1,0 +1,258 @@
+//! Planning: for each light, which ghosts to trace and at how many wavelengths — and what is
+//! left out and how much energy that drops.
+//!
+//! A ghost is left out when its energy share (its flux over the direct image's, from its
+//! bounds) is under the quality's threshold, or when its sensor bounds miss the frame. A ghost
+//! whose image moves less than half a pixel between the shortest and the longest wavelength
+//! band is traced once, with the bands' colours summed.
+
+use flarebench_sdk::LensSystem;
+use flarebench_sdk::color::SpectralSampling;
+use flarebench_sdk::ghost::bounds::{self, GhostBounds, MAX_GRID, MIN_GRID};
+use flarebench_sdk::ghost::render::{Band, Frame};
+use flarebench_sdk::ghost::table::BoundsTable;
+use flarebench_sdk::ghost::{GhostPath, GridTrace, Rect, enumerate_ghosts};
+use flarebench_sdk::trace::InterfaceTableSet;
+use rayon::prelude::*;
+use serde::Serialize;
+
+use super::colour::GhostColours;
+use super::scene::{LightSpec, Quality};
+
+/// Wavelength at which bounds and energies are found (nm).
+pub const BOUNDS_LAMBDA_NM: f64 = 550.0;
+
+/// What a light needs.
+#[derive(Debug)]
+pub struct LightPlan {
+    pub light: LightSpec,
+    /// Every band of the light's spectral sampling.
+    pub bands: Vec<Band>,
+    /// All bands merged into one (middle wavelength, summed colour), for ghosts whose
+    /// dispersion does not show.
+    pub merged: Band,
+    pub ghosts: Vec<GhostJob>,
+    pub dropped: Vec<DroppedGhost>,
+}
+
+/// A ghost to render.
+#[derive(Clone, Debug, Serialize)]
+pub struct GhostJob {
+    pub path: GhostPath,
+    #[serde(skip)]
+    pub bounds: GhostBounds,
+    /// Grid vertices per side.
+    pub grid: usize,
+    /// True when traced at every band, false when at the merged band only.
+    pub spectral: bool,
+    /// The ghost's colour at each band (spectral), or at the merged band alone: see
+    /// [`super::colour`].
+    pub band_rgb: Vec<[f32; 3]>,
+    pub energy_share: f64,
+}
+
+/// Why a ghost was left out.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DropReason {
+    /// No ray of the ghost reaches the sensor at this angle.
+    NoLight,
+    /// Energy share under the threshold.
+    Dim,
+    /// Sensor bounds outside the frame.
+    OffFrame,
+}
+
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct DroppedGhost {
+    pub path: GhostPath,
+    pub reason: DropReason,
+    pub energy_share: f64,
+}
+
+impl LightPlan {
+    /// Energy share of all ghosts (relative to the direct image) and the part of it left out.
+    pub fn energy(&self) -> (f64, f64) {
+        let kept: f64 = self.ghosts.iter().map(|g| g.energy_share).sum();
+        let dropped: f64 = self.dropped.iter().map(|d| d.energy_share).sum();
+        (kept + dropped, dropped)
+    }
+}
+
+/// How to plan: quality, bands, culling, grid scale and where bounds come from.
+#[derive(Clone, Copy, Debug)]
+pub struct PlanOptions<'a> {
+    pub quality: Quality,
+    pub bands: usize,
+    /// False keeps every ghost that has light (the reference renderer).
+    pub cull: bool,
+    /// Multiplies each ghost's grid.
+    pub grid_scale: f64,
+    /// Precomputed bounds (`flarebench precompute`); without them, bounds are traced for each
+    /// light's angle.
+    pub precomputed: Option<&'a BoundsTable>,
+    /// Trace every band of every ghost, however small its dispersion (the reference).
+    pub all_bands: bool,
+}
+
+/// Plans every light of a scene.
+pub fn plan(
+    system: &LensSystem,
+    lights: &[LightSpec],
+    frame: &Frame,
+    opts: &PlanOptions<'_>,
+) -> anyhow::Result<Vec<LightPlan>> {
+    let PlanOptions {
+        quality,
+        bands,
+        cull,
+        grid_scale,
+        precomputed,
+        all_bands,
+    } = *opts;
+    let paths = enumerate_ghosts(system);
+    let tables = InterfaceTableSet::for_system(system, BOUNDS_LAMBDA_NM);
+    lights
+        .iter()
+        .map(|light| {
+            let sampling = SpectralSampling::new(bands, light.spectrum)?;
+            let band_list: Vec<Band> = sampling
+                .wavelengths_nm()
+                .iter()
+                .zip(sampling.weights())
+                .map(|(&l, &rgb)| Band::new(system, l, rgb.map(|c| c * light.intensity as f32)))
+                .collect();
+            let mid = sampling.wavelengths_nm()[bands / 2];
+            let sum = band_list.iter().fold([0f32; 3], |a, b| {
+                [a[0] + b.rgb[0], a[1] + b.rgb[1], a[2] + b.rgb[2]]
+            });
+            let merged = Band::new(system, mid, sum);
+            let colours = GhostColours::new(
+                system,
+                light.spectrum,
+                sampling.wavelengths_nm(),
+                light.intensity as f32,
+            )?;
+            let theta = light.theta_deg.to_radians();
+            let phi = light.phi_deg.to_radians();
+            let found: Vec<(GhostPath, Option<GhostBounds>)> = match precomputed {
+                Some(table) => {
+                    let max = table.angles_deg.last().copied().unwrap_or(0.0);
+                    anyhow::ensure!(
+                        light.theta_deg <= max,
+                        "the light at {}° is outside the precomputed table (0–{max}°)",
+                        light.theta_deg
+                    );
+                    paths
+                        .iter()
+                        .map(|&p| {
+                            (
+                                p,
+                                table
+                                    .ghost_index(p)
+                                    .and_then(|g| table.lookup(g, light.theta_deg)),
+                            )
+                        })
+                        .collect()
+                }
+                None => {
+                    let direct =
+                        bounds::direct_flux(system, &tables, theta, &mut GridTrace::default());
+                    paths
+                        .par_iter()
+                        .map_init(GridTrace::default, |scratch, &path| {
+                            (
+                                path,
+                                bounds::precise(system, path, &tables, theta, direct, scratch),
+                            )
+                        })
+                        .collect()
+                }
+            };
+            let (lo, hi) = (
+                sampling.wavelengths_nm()[0],
+                sampling.wavelengths_nm()[bands - 1],
+            );
+            let mut ghosts = Vec::new();
+            let mut dropped = Vec::new();
+            for (path, b) in found {
+                let Some(b) = b else {
+                    dropped.push(DroppedGhost {
+                        path,
+                        reason: DropReason::NoLight,
+                        energy_share: 0.0,
+                    });
+                    continue;
+                };
+                let drop = |reason| DroppedGhost {
+                    path,
+                    reason,
+                    energy_share: b.energy_share,
+                };
+                if cull && b.energy_share < quality.energy_threshold() {
+                    dropped.push(drop(DropReason::Dim));
+                    continue;
+                }
+                if cull && !overlaps_frame(&b.sensor.rotated(phi), frame) {
+                    dropped.push(drop(DropReason::OffFrame));
+                    continue;
+                }
+                let spectral = bands > 1
+                    && (all_bands || dispersion_px(system, path, theta, lo, hi, frame) >= 0.5);
+                let band_rgb = if spectral {
+                    colours.band_colours(path)
+                } else {
+                    vec![colours.merged_colour(path, bands / 2)]
+                };
+                let grid = ((b.grid as f64 * grid_scale).round() as usize)
+                    .clamp(MIN_GRID / 2, MAX_GRID * 4);
+                ghosts.push(GhostJob {
+                    path,
+                    bounds: b,
+                    grid,
+                    spectral,
+                    band_rgb,
+                    energy_share: b.energy_share,
+                });
+            }
+            Ok(LightPlan {
+                light: light.clone(),
+                bands: band_list,
+                merged,
+                ghosts,
+                dropped,
+            })
+        })
+        .collect()
+}
+
+/// True when a sensor rectangle (mm) overlaps the frame.
+fn overlaps_frame(sensor: &Rect, frame: &Frame) -> bool {
+    let (hw, hh) = (0.5 * frame.film_width_mm, 0.5 * frame.film_height_mm);
+    sensor.x1 >= -hw && sensor.x0 <= hw && sensor.y1 >= -hh && sensor.y0 <= hh
+}
+
+/// How far (pixels) a ghost's paraxial image moves or grows between two wavelengths.
+fn dispersion_px(
+    system: &LensSystem,
+    path: GhostPath,
+    theta: f64,
+    lo: f64,
+    hi: f64,
+    frame: &Frame,
+) -> f64 {
+    let (Some(a), Some(b)) = (
+        bounds::approximate(system, path, lo, theta),
+        bounds::approximate(system, path, hi, theta),
+    ) else {
+        // Paraxially empty: assume it shows.
+        return f64::INFINITY;
+    };
+    let d = [
+        (a.sensor.x0 - b.sensor.x0).abs(),
+        (a.sensor.x1 - b.sensor.x1).abs(),
+        (a.sensor.y0 - b.sensor.y0).abs(),
+        (a.sensor.y1 - b.sensor.y1).abs(),
+    ];
+    d.iter().cloned().fold(0.0, f64::max) / frame.pixel_mm()
+}

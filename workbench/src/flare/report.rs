@@ -1,0 +1,175 @@
+//! The render report: what was traced, what was left out and what it cost.
+
+use serde::Serialize;
+
+use super::plan::{DropReason, LightPlan};
+use flarebench_sdk::ghost::render::GhostStats;
+
+/// Time spent per stage (milliseconds).
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Timings {
+    pub load_ms: f64,
+    pub plan_ms: f64,
+    pub render_ms: f64,
+    pub write_ms: f64,
+    pub reference_ms: Option<f64>,
+}
+
+/// Error of the image against the reference renderer.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct ErrorReport {
+    /// sqrt(Σ|a − b|²) / sqrt(Σ|b|²) over every channel.
+    pub relative_rmse: f64,
+    /// Σ|a − b| / Σ|b|.
+    pub relative_l1: f64,
+    /// (Σa − Σb) / Σb.
+    pub energy_error: f64,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct GhostLine {
+    pub ghost: String,
+    pub grid: usize,
+    pub spectral: bool,
+    pub energy_share: f64,
+    pub rays: usize,
+    pub triangles: usize,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct DroppedLine {
+    pub ghost: String,
+    pub reason: DropReason,
+    pub energy_share: f64,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct LightReport {
+    pub theta_deg: f64,
+    pub phi_deg: f64,
+    pub intensity: f64,
+    pub ghosts_total: usize,
+    pub ghosts_traced: usize,
+    pub ghosts_dropped: usize,
+    /// Sum of the ghosts' energy shares (of the direct image).
+    pub ghost_energy_share: f64,
+    /// Part of that left out by planning (fraction of the ghost energy).
+    pub dropped_energy_fraction: f64,
+    pub bands: usize,
+    pub ghosts: Vec<GhostLine>,
+    pub dropped: Vec<DroppedLine>,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct RenderReport {
+    pub lens: String,
+    pub width: usize,
+    pub height: usize,
+    pub quality: super::scene::Quality,
+    pub output: String,
+    pub timings: Timings,
+    pub rays_traced: usize,
+    pub triangles: usize,
+    /// Σ of each channel over the image.
+    pub image_sum_rgb: [f64; 3],
+    pub image_max: f32,
+    /// Exposure applied to a PNG (stops).
+    pub exposure_ev: f32,
+    pub lights: Vec<LightReport>,
+    pub error: Option<ErrorReport>,
+}
+
+impl LightReport {
+    pub fn new(lp: &LightPlan, stats: &[GhostStats]) -> Self {
+        let (total, dropped) = lp.energy();
+        let mut ghosts: Vec<GhostLine> = lp
+            .ghosts
+            .iter()
+            .zip(stats)
+            .map(|(g, s)| GhostLine {
+                ghost: g.path.to_string(),
+                grid: g.grid,
+                spectral: g.spectral,
+                energy_share: g.energy_share,
+                rays: s.rays,
+                triangles: s.triangles,
+            })
+            .collect();
+        ghosts.sort_by(|a, b| b.energy_share.total_cmp(&a.energy_share));
+        LightReport {
+            theta_deg: lp.light.theta_deg,
+            phi_deg: lp.light.phi_deg,
+            intensity: lp.light.intensity,
+            ghosts_total: lp.ghosts.len() + lp.dropped.len(),
+            ghosts_traced: lp.ghosts.len(),
+            ghosts_dropped: lp.dropped.len(),
+            ghost_energy_share: total,
+            dropped_energy_fraction: if total > 0.0 { dropped / total } else { 0.0 },
+            bands: lp.bands.len(),
+            ghosts,
+            dropped: lp
+                .dropped
+                .iter()
+                .map(|d| DroppedLine {
+                    ghost: d.path.to_string(),
+                    reason: d.reason,
+                    energy_share: d.energy_share,
+                })
+                .collect(),
+        }
+    }
+}
+
+impl RenderReport {
+    /// The report as readable text.
+    pub fn text(&self) -> String {
+        let t = &self.timings;
+        let mut s = format!(
+            "{} → {} ({}×{}, quality {:?})\n",
+            self.lens, self.output, self.width, self.height, self.quality
+        );
+        s += &format!(
+            "time: load {:.1} ms, plan {:.1} ms, render {:.1} ms, write {:.1} ms{}\n",
+            t.load_ms,
+            t.plan_ms,
+            t.render_ms,
+            t.write_ms,
+            t.reference_ms
+                .map_or(String::new(), |r| format!(", reference {r:.1} ms"))
+        );
+        s += &format!(
+            "rays traced {}, triangles {}\n",
+            self.rays_traced, self.triangles
+        );
+        for (i, l) in self.lights.iter().enumerate() {
+            s += &format!(
+                "light {i} at θ {}°, φ {}°: {} of {} ghosts traced, {} left out ({:.3}% of the ghost energy); ghosts carry {:.3e} of the direct image's energy\n",
+                l.theta_deg,
+                l.phi_deg,
+                l.ghosts_traced,
+                l.ghosts_total,
+                l.ghosts_dropped,
+                100.0 * l.dropped_energy_fraction,
+                l.ghost_energy_share
+            );
+            for g in l.ghosts.iter().take(5) {
+                s += &format!(
+                    "  ghost {:>6}: energy {:.3e}, grid {}², {}\n",
+                    g.ghost,
+                    g.energy_share,
+                    g.grid,
+                    if g.spectral { "spectral" } else { "one band" }
+                );
+            }
+        }
+        if let Some(e) = &self.error {
+            s += &format!(
+                "error against the reference: relative RMSE {:.3}%, relative L1 {:.3}%, energy {:+.3}%\n",
+                100.0 * e.relative_rmse,
+                100.0 * e.relative_l1,
+                100.0 * e.energy_error
+            );
+        }
+        s
+    }
+}
