@@ -350,31 +350,58 @@ fn rasterize_in_tile<const N: usize, F>(
         if i0 >= i1 {
             continue;
         }
+        // Columns [full0, full1) lie wholly inside the strip: both its top and bottom edges
+        // cover them (the strip is convex). They get area 1 at the pixel centre without
+        // walking the bottom edge through them.
+        let (full0, full1) = full_run(&s.strip, y0, i0, i1);
         let moments = &mut s.moments[i0..i1];
         moments.fill([0.0; 3]);
         let strip = s.strip.vertices();
         let mut p = strip[strip.len() - 1];
         for &q in strip {
-            add_edge(moments, i0, [p[0], p[1] - y0], [q[0], q[1] - y0]);
+            let (a, b) = ([p[0], p[1] - y0], [q[0], q[1] - y0]);
+            if a[1] == 1.0 && b[1] == 1.0 && full0 < full1 {
+                // The bottom edge: only its parts outside the full run.
+                let (f0, f1) = (full0 as f64, full1 as f64);
+                let (lo, hi) = (a[0].min(b[0]), a[0].max(b[0]));
+                let dir = |u: f64, v: f64| if a[0] < b[0] { (u, v) } else { (v, u) };
+                if lo < f0 {
+                    let (u, v) = dir(lo, hi.min(f0));
+                    add_edge(moments, i0, [u, 1.0], [v, 1.0]);
+                }
+                if hi > f1 {
+                    let (u, v) = dir(lo.max(f1), hi);
+                    add_edge(moments, i0, [u, 1.0], [v, 1.0]);
+                }
+            } else {
+                add_edge(moments, i0, a, b);
+            }
             p = q;
         }
         let row = &mut view.rows[j];
         for (k, m) in moments.iter().enumerate() {
-            // −∮ y dx is the area for one winding and minus it for the other.
-            let area = tri.winding * m[0];
-            #[allow(
-                clippy::neg_cmp_op_on_partial_ord,
-                reason = "`!(area > 0)` also skips NaN"
-            )]
-            if !(area > 0.0) {
-                continue;
-            }
             let i = i0 + k;
-            // First moments / area, both with the same sign: the centroid, in the pixel.
-            let centroid = [
-                i as f64 + (m[1] / m[0]).clamp(0.0, 1.0),
-                y0 + (m[2] / m[0]).clamp(0.0, 1.0),
-            ];
+            let (area, centroid) = if i >= full0 && i < full1 {
+                (1.0, [i as f64 + 0.5, y0 + 0.5])
+            } else {
+                // −∮ y dx is the area for one winding and minus it for the other.
+                let area = tri.winding * m[0];
+                #[allow(
+                    clippy::neg_cmp_op_on_partial_ord,
+                    reason = "`!(area > 0)` also skips NaN"
+                )]
+                if !(area > 0.0) {
+                    continue;
+                }
+                // First moments / area, both with the same sign: the centroid, in the pixel.
+                (
+                    area,
+                    [
+                        i as f64 + (m[1] / m[0]).clamp(0.0, 1.0),
+                        y0 + (m[2] / m[0]).clamp(0.0, 1.0),
+                    ],
+                )
+            };
             let value = shade(&tri.interpolate(centroid));
             let area = area as f32;
             let px = &mut row[i];
@@ -423,6 +450,36 @@ fn add_edge(moments: &mut [[f64; 3]], i0: usize, p: [f64; 2], q: [f64; 2]) {
         }
         u = v;
         yu = yv;
+    }
+}
+
+/// The columns `[full0, full1)` within `[i0, i1)` whose pixel lies wholly inside the strip
+/// polygon between `y0` and `y0 + 1`: those inside both its top and bottom cross-sections,
+/// which are spanned by the vertices lying exactly on those lines (clipping puts them there
+/// exactly). An empty range when the strip does not reach both lines.
+fn full_run(strip: &Polygon, y0: f64, i0: usize, i1: usize) -> (usize, usize) {
+    let y1 = y0 + 1.0;
+    let (mut top, mut bottom) = (
+        [f64::INFINITY, f64::NEG_INFINITY],
+        [f64::INFINITY, f64::NEG_INFINITY],
+    );
+    for p in strip.vertices() {
+        if p[1] == y0 {
+            top = [top[0].min(p[0]), top[1].max(p[0])];
+        } else if p[1] == y1 {
+            bottom = [bottom[0].min(p[0]), bottom[1].max(p[0])];
+        }
+    }
+    let (lo, hi) = (top[0].max(bottom[0]), top[1].min(bottom[1]));
+    if !(lo <= hi) {
+        return (i1, i1);
+    }
+    let full0 = ceil_index(lo).max(i0);
+    let full1 = floor_index(hi).min(i1);
+    if full0 < full1 {
+        (full0, full1)
+    } else {
+        (i1, i1)
     }
 }
 
