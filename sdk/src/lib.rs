@@ -9,6 +9,9 @@
 //! - [`paraxial`]: first-order analysis (focal lengths, pupils, f-number, Petzval sum).
 //! - [`aperture`]: the stop's opening (circle, iris of straight or rounded blades, mask image),
 //!   shared by ghosts and the starburst.
+//! - [`color`]: spectral → colour (CIE 1931 observer, linear sRGB, light spectra, the
+//!   wavelengths a render samples and their RGB weights).
+//! - [`image`] and [`raster`]: linear HDR images and the exact-coverage CPU triangle rasterizer.
 //!
 //! Conventions (docs/ARCHITECTURE.md): millimetres, nanometres for wavelengths, radians inside;
 //! surfaces are listed object side first; curvature `c = 1/R` with `R > 0` meaning the centre of

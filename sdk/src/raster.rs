@@ -2,13 +2,17 @@
 //!
 //! **Coverage.** Each triangle adds to every pixel it overlaps
 //! `A · shade(attributes at C)`, where `A` is the exact area of the pixel square covered by the
-//! triangle (pixel², found by clipping the triangle to the square, Sutherland–Hodgman) and `C`
-//! the centroid of that covered piece; attributes are interpolated linearly (barycentric) at
-//! `C`. So the contribution is the exact integral of `shade` over the covered piece whenever
-//! `shade` is affine in the attributes, and energy is conserved exactly: for a constant shade
-//! `c` the image gains `c × (area of the triangle inside the image)`, up to f32 rounding of
-//! the pixel sums. Pixels whose square lies wholly inside the triangle skip the clip (area 1,
-//! centroid at the pixel centre).
+//! triangle (pixel²) and `C` the centroid of that covered piece; attributes are interpolated
+//! linearly (barycentric) at `C`. So the contribution is the exact integral of `shade` over
+//! the covered piece whenever `shade` is affine in the attributes, and energy is conserved
+//! exactly: for a constant shade `c` the image gains `c × (area of the triangle inside the
+//! image)`, up to f32 rounding of the pixel sums (measured below 1e-7 relative).
+//!
+//! **Method.** The triangle is clipped (Sutherland–Hodgman) to its tile and to each pixel row;
+//! the area and first moments of the row piece above each pixel column then follow from
+//! Green's theorem along the piece's edges (see `rasterize_in_tile`), and pixels wholly
+//! inside get area 1 at their centre. No polygon is cut per pixel; a test checks every pixel
+//! against clipping the triangle to the pixel square.
 //!
 //! **Conventions.** Positions are pixel coordinates, x to the right and y down; pixel `(i, j)`
 //! covers `[i, i + 1) × [j, j + 1)`. Either winding. Geometry is computed in f64 (from the

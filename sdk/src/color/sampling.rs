@@ -16,6 +16,10 @@
 //! equal-energy light ([`LightSpectrum::Flat`]) is (1.205, 0.948, 0.909), a 6500 K black body
 //! (1.043, 0.984, 1.035). Weights may be negative for saturated spectral colours outside the
 //! sRGB gamut (the red weight between about 440 and 545 nm), as in any CMF-based render.
+//!
+//! **How many wavelengths.** Colour error of `Σ_k w_k` against `K → ∞`, relative to the largest
+//! channel, measured over blackbody, D65, flat and RGB lights (`many_wavelengths_converge_…`):
+//! K = 4 up to 39%, K = 16 up to 3.8%, K = 64 up to 0.2%, K = 1024 below 1e-5.
 
 use super::cmf::cie1931_xyz_bar;
 use super::light::{LightSpectrum, LightSpectrumError};
