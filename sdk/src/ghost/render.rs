@@ -241,7 +241,7 @@ pub fn render_ghost(
             }
         }
         stats.triangles += scratch.triangles.len();
-        let aperture = ctx.aperture;
+        let aperture = ctx.aperture.sampler();
         let rgb = band.rgb;
         rasterize(
             img,

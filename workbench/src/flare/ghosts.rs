@@ -35,7 +35,7 @@ pub fn render(
         .flat_map(|(l, lp)| (0..lp.ghosts.len()).map(move |g| (l, g)))
         .collect();
     // One accumulator image per chunk of jobs: few chunks, so few full-size images.
-    let chunk = (jobs.len() / (4 * rayon::current_num_threads())).max(1);
+    let chunk = (jobs.len() / (2 * rayon::current_num_threads())).max(1);
     let (img, mut stats) = jobs
         .par_iter()
         .with_min_len(chunk)
