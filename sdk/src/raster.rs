@@ -474,8 +474,9 @@ fn full_run(strip: &Polygon, y0: f64, i0: usize, i1: usize) -> (usize, usize) {
             bottom = [bottom[0].min(p[0]), bottom[1].max(p[0])];
         }
     }
+    // A missing cross-section leaves ±∞ here, so lo > hi (vertices are finite: no NaN).
     let (lo, hi) = (top[0].max(bottom[0]), top[1].min(bottom[1]));
-    if !(lo <= hi) {
+    if lo > hi {
         return (i1, i1);
     }
     let full0 = ceil_index(lo).max(i0);
