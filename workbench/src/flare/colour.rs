@@ -34,19 +34,14 @@ fn surface_factors(system: &LensSystem, lambda_nm: f64) -> Vec<[f64; 4]> {
 
 /// Throughput of a ghost path at normal incidence from per-surface factors.
 fn path_throughput(path: GhostPath, f: &[[f64; 4]], sensor: usize) -> f64 {
-    let mut t = 1.0;
-    for s in 0..path.first {
-        t *= f[s][0];
-    }
-    t *= f[path.first][1];
-    for s in (path.second + 1..path.first).rev() {
-        t *= f[s][2];
-    }
-    t *= f[path.second][3];
-    for s in path.second + 1..sensor {
-        t *= f[s][0];
-    }
-    t
+    // Forward to `first`, reflect; back to `second`, reflect; forward to the sensor.
+    let forward_in: f64 = f[..path.first].iter().map(|s| s[0]).product();
+    let backward: f64 = f[path.second + 1..path.first]
+        .iter()
+        .map(|s| s[2])
+        .product();
+    let forward_out: f64 = f[path.second + 1..sensor].iter().map(|s| s[0]).product();
+    forward_in * f[path.first][1] * backward * f[path.second][3] * forward_out
 }
 
 /// Per-wavelength data for colouring every ghost of a lens under one light.
@@ -112,7 +107,7 @@ impl GhostColours {
     }
 
     fn sum(&self, path: GhostPath, t_band: f64, keep: impl Fn(f64) -> bool) -> [f32; 3] {
-        if !(t_band > 0.0) {
+        if t_band.is_nan() || t_band <= 0.0 {
             return [0.0; 3];
         }
         let mut c = [0f32; 3];
@@ -159,7 +154,10 @@ mod tests {
             assert!((ch - 1.0).abs() < 1e-3, "{total:?}");
         }
         let m = c.merged_colour(path, 1);
-        assert!((0..3).all(|i| (m[i] - total[i]).abs() < 1e-5), "{m:?} vs {total:?}");
+        assert!(
+            (0..3).all(|i| (m[i] - total[i]).abs() < 1e-5),
+            "{m:?} vs {total:?}"
+        );
         // A red-tuned quarter-wave coating makes the ghost blue.
         for s in &mut sys.surfaces[1..3] {
             s.coating = Coating::SingleLayer {
