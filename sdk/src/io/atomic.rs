@@ -15,7 +15,7 @@ pub fn save_xml(system: &LensSystem, path: &Path) -> io::Result<()> {
 }
 
 /// Writes `bytes` to `path` through a temporary file in the same directory.
-pub(crate) fn write_atomically(path: &Path, bytes: &[u8]) -> io::Result<()> {
+pub fn write_atomically(path: &Path, bytes: &[u8]) -> io::Result<()> {
     let tmp = temp_path(path)?;
     let result = (|| {
         let mut f = fs::OpenOptions::new()

@@ -17,7 +17,7 @@ mod zmx;
 
 use std::path::Path;
 
-pub use atomic::save_xml;
+pub use atomic::{save_xml, write_atomically};
 pub use error::LensFileError;
 pub use olf_bounds::{
     OlfAngleEntry, OlfGhostBounds, OlfGhostEntry, OlfRect, parse_olf_bounds, read_olf_bounds,

@@ -82,9 +82,7 @@ pub fn run(args: &PrecomputeArgs, quiet: bool) -> anyhow::Result<()> {
     let secs = t.elapsed().as_secs_f64();
     bar.finish_and_clear();
     let text = serde_json::to_string(&table)?;
-    let tmp = args.output.with_extension("json.tmp");
-    std::fs::write(&tmp, text).with_context(|| format!("could not write {}", tmp.display()))?;
-    std::fs::rename(&tmp, &args.output)
+    flarebench_sdk::io::write_atomically(&args.output, text.as_bytes())
         .with_context(|| format!("could not write {}", args.output.display()))?;
     let lit = table
         .bounds
