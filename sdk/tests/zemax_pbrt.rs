@@ -174,7 +174,7 @@ fn cooke_triplet_efl_matches_optiland_and_its_source_csv() {
     let s = load("zemax", "ol_lens1.zmx").system;
     // optiland: 24.990670494950276 mm at the primary wavelength 0.5875618 µm (the d line).
     assert!((efl(&s, 587.5618) - 24.990670494950276).abs() < SAME_GLASS_DATA_MM);
-    // shared/data/lenses-csv/zmx_optiland_cooke_triplet_lens1.csv header: "EFL=24.9908 mm"
+    // lenses/sources/csv/zmx_optiland_cooke_triplet_lens1.csv header: "EFL=24.9908 mm"
     // (its own converter, d line, nd rounded to 5 decimals: allow 5e-4 mm).
     assert!((efl(&s, LAMBDA_D_NM) - 24.9908).abs() < 5e-4);
 }
