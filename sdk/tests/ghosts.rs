@@ -139,7 +139,6 @@ fn approximate_bounds_are_close_to_precise_ones_near_the_axis() {
         compared += 1;
     }
     assert!(compared > 10, "only {compared} ghosts compared");
-    let _ = BoundsMode::Precise;
 }
 
 #[test]
