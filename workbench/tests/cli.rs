@@ -1,26 +1,9 @@
 //! End-to-end tests of the `flarebench` binary: real output, real exit codes.
 
+mod common;
+
+use common::{flarebench, json};
 use std::path::PathBuf;
-use std::process::{Command, Output};
-
-use serde_json::Value;
-
-fn flarebench(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_flarebench"))
-        .args(args)
-        .output()
-        .expect("binary runs")
-}
-
-fn json(args: &[&str]) -> Value {
-    let out = flarebench(args);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("valid JSON")
-}
 
 fn temp_file(name: &str, text: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("flarebench-cli-{}", std::process::id()));

@@ -1,27 +1,10 @@
 //! End-to-end tests of Zemax and PBRT files on the command line: `convert` to XML, `info` and
 //! `trace` reading them directly, `--config` and `--pbrt-convention`.
 
+mod common;
+
+use common::{flarebench, json};
 use std::path::PathBuf;
-use std::process::{Command, Output};
-
-use serde_json::Value;
-
-fn flarebench(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_flarebench"))
-        .args(args)
-        .output()
-        .expect("binary runs")
-}
-
-fn json(args: &[&str]) -> Value {
-    let out = flarebench(args);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("valid JSON")
-}
 
 fn data(file: &str) -> String {
     let dir = if file.ends_with(".dat") {

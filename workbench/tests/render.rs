@@ -1,36 +1,14 @@
 //! End-to-end tests of `flarebench render` and `flarebench precompute`.
 
-use std::path::PathBuf;
-use std::process::{Command, Output};
+mod common;
+
+use common::{flarebench, json, temp_dir};
 
 use serde_json::Value;
 
-fn flarebench(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_flarebench"))
-        .args(args)
-        .output()
-        .expect("binary runs")
-}
-
-fn temp_dir() -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("flarebench-render-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn json(args: &[&str]) -> Value {
-    let out = flarebench(args);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("valid JSON")
-}
-
 #[test]
 fn render_writes_an_image_and_reports_what_it_did() {
-    let out = temp_dir().join("heliar.exr");
+    let out = temp_dir("render").join("heliar.exr");
     let v = json(&[
         "render",
         "heliar-tronnier",
@@ -73,7 +51,7 @@ fn render_writes_an_image_and_reports_what_it_did() {
 
 #[test]
 fn reference_error_is_reported_and_small() {
-    let out = temp_dir().join("ref.png");
+    let out = temp_dir("render").join("ref.png");
     let v = json(&[
         "render",
         "heliar-tronnier",
@@ -99,7 +77,7 @@ fn reference_error_is_reported_and_small() {
 
 #[test]
 fn precomputed_bounds_give_the_same_ghosts() {
-    let dir = temp_dir();
+    let dir = temp_dir("render");
     let table = dir.join("heliar-bounds.json");
     let out = flarebench(&[
         "precompute",
@@ -161,7 +139,7 @@ fn precomputed_bounds_give_the_same_ghosts() {
 
 #[test]
 fn bad_render_arguments_are_refused() {
-    let o = temp_dir().join("bad.exr");
+    let o = temp_dir("render").join("bad.exr");
     let o = o.to_str().unwrap();
     for args in [
         vec!["render", "heliar-tronnier", "--light", "95,0", "-o", o],
