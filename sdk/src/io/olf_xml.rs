@@ -19,6 +19,7 @@ mod tests;
 pub use write::{write_olf_xml, write_xml};
 
 use super::{LensFileError, LoadedLens};
+use crate::io::located::Reporter;
 use crate::io::text::LineIndex;
 
 /// Tag names of the format.
@@ -67,29 +68,16 @@ pub fn parse_olf_xml(text: &str, file_label: &str) -> Result<LoadedLens, LensFil
     if let Err(issues) = parsed.system.validate() {
         let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         let lines = LineIndex::new(text);
-        let mut located = issues.iter().map(|issue| {
-            let (pos, field) = parsed.spans.locate(issue);
-            let (line, column) = lines.line_col(pos);
-            LensFileError::at(file_label, line, column, field, issue.message.clone())
-        });
-        if let Some(mut first) = located.next() {
-            let rest: Vec<String> = located
-                .map(|e| {
-                    format!(
-                        "{}:{}: field `{}`: {}",
-                        e.line, e.column, e.field, e.message
-                    )
-                })
-                .collect();
-            if !rest.is_empty() {
-                first.message = format!(
-                    "{} (and {} more: {})",
-                    first.message,
-                    rest.len(),
-                    rest.join("; ")
-                );
-            }
-            return Err(first);
+        let located = issues
+            .iter()
+            .map(|issue| {
+                let (pos, field) = parsed.spans.locate(issue);
+                let (line, column) = lines.line_col(pos);
+                LensFileError::at(file_label, line, column, field, issue.message.clone())
+            })
+            .collect();
+        if let Some(e) = Reporter::combine(located) {
+            return Err(e);
         }
     }
     Ok(LoadedLens {

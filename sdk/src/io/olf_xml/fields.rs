@@ -2,31 +2,11 @@
 //! into errors and warnings, the known-tag collection, and number parsing.
 
 use crate::io::LensFileError;
-use crate::io::text::LineIndex;
 use crate::io::xml_tree::Node;
 
-/// The file being read: its name, its line index and the warnings so far.
-pub(super) struct Ctx<'a> {
-    pub file: &'a str,
-    pub lines: LineIndex<'a>,
-    pub warnings: Vec<String>,
-}
-
-impl Ctx<'_> {
-    pub fn error(&self, pos: usize, field: &str, message: impl Into<String>) -> LensFileError {
-        let (line, column) = self.lines.line_col(pos);
-        LensFileError::at(self.file, line, column, field, message)
-    }
-
-    pub fn warn(&mut self, pos: usize, message: impl AsRef<str>) {
-        let (line, column) = self.lines.line_col(pos);
-        self.warnings.push(format!(
-            "{}:{line}:{column}: {}",
-            self.file,
-            message.as_ref()
-        ));
-    }
-}
+/// The file being read (its label, line index and warnings): the same reporter the
+/// line-based readers use.
+pub(super) use crate::io::located::Reporter as Ctx;
 
 /// The known children of one element, first occurrence of each; warns about the rest.
 pub(super) struct Fields<'n> {

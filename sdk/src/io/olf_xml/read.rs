@@ -6,7 +6,6 @@ use super::medium::read_medium;
 use super::spans::{ElementSpans, SystemSpans};
 use super::tags;
 use crate::io::LensFileError;
-use crate::io::text::LineIndex;
 use crate::io::xml_tree::{self, Node};
 use crate::system::{LensSystem, Surface, SurfaceKind, curvature_from_radius};
 
@@ -24,11 +23,7 @@ pub(super) struct Parsed {
 /// Parses the document without validating the resulting system.
 pub(super) fn parse_document(text: &str, file: &str) -> Result<Parsed, LensFileError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    let mut ctx = Ctx {
-        file,
-        lines: LineIndex::new(text),
-        warnings: Vec::new(),
-    };
+    let mut ctx = Ctx::new(file, text);
     let root = xml_tree::parse(text).map_err(|e| {
         let field = e.element.unwrap_or_default();
         ctx.error(e.pos, &field, e.message)
