@@ -4,7 +4,7 @@
 
 pub mod aperture_file;
 pub mod cli;
-pub mod flare;
 pub mod lens_library;
 pub mod output;
+pub mod report;
 pub mod table;

@@ -8,12 +8,13 @@ use clap::Args;
 use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::ghost::render::Frame;
 
-use crate::flare::plan::PlanOptions;
-use crate::flare::report::{ErrorReport, LightReport, RenderReport, Timings};
-use crate::flare::scene::{LightSpec, Quality};
-use crate::flare::{ghosts, plan};
+use ghost_raytrace::plan::PlanOptions;
+use ghost_raytrace::scene::{LightSpec, Quality};
+use ghost_raytrace::{ghosts, plan};
+
 use crate::lens_library;
 use crate::output::{ToneMap, ToneOperator, save_image};
+use crate::report::{ErrorReport, LightReport, RenderReport, Timings};
 use flarebench_sdk::ghost::table::BoundsTable;
 
 #[derive(Debug, Args)]
@@ -29,7 +30,8 @@ pub struct RenderArgs {
     /// aspect ratio.
     #[arg(long, default_value = "1920x1080", value_parser = parse_size)]
     pub size: (usize, usize),
-    #[arg(long, value_enum, default_value_t = Quality::Default)]
+    /// Speed against accuracy: fast, default or high (docs/performance.md gives each one's error).
+    #[arg(long, default_value_t = Quality::Default)]
     pub quality: Quality,
     /// Iris blade count (0: a circular stop).
     #[arg(long, default_value_t = 0)]

@@ -11,7 +11,8 @@ use flarebench_sdk::paraxial::{analyse, stop_opening};
 use flarebench_sdk::spectrum::LAMBDA_D_NM;
 use rayon::prelude::*;
 
-use super::plan::LightPlan;
+use crate::GhostRenderError;
+use crate::plan::LightPlan;
 
 /// Renders every planned ghost; returns the image and, per light, each ghost's statistics in
 /// plan order.
@@ -20,7 +21,7 @@ pub fn render(
     aperture: &Aperture,
     frame: Frame,
     plans: &[LightPlan],
-) -> anyhow::Result<(HdrImage, Vec<Vec<GhostStats>>)> {
+) -> Result<(HdrImage, Vec<Vec<GhostStats>>), GhostRenderError> {
     let p = analyse(system, LAMBDA_D_NM)?;
     let ctx = GhostContext {
         system,

@@ -16,8 +16,9 @@ use flarebench_sdk::trace::InterfaceTableSet;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::colour::GhostColours;
-use super::scene::{LightSpec, Quality};
+use crate::GhostRenderError;
+use crate::colour::GhostColours;
+use crate::scene::{LightSpec, Quality};
 
 /// Wavelength at which bounds and energies are found (nm).
 pub const BOUNDS_LAMBDA_NM: f64 = 550.0;
@@ -101,7 +102,7 @@ pub fn plan(
     lights: &[LightSpec],
     frame: &Frame,
     opts: &PlanOptions<'_>,
-) -> anyhow::Result<Vec<LightPlan>> {
+) -> Result<Vec<LightPlan>, GhostRenderError> {
     let PlanOptions {
         quality,
         bands,
@@ -138,11 +139,12 @@ pub fn plan(
             let found: Vec<(GhostPath, Option<GhostBounds>)> = match precomputed {
                 Some(table) => {
                     let max = table.angles_deg.last().copied().unwrap_or(0.0);
-                    anyhow::ensure!(
-                        light.theta_deg <= max,
-                        "the light at {}° is outside the precomputed table (0–{max}°)",
-                        light.theta_deg
-                    );
+                    if light.theta_deg > max {
+                        return Err(GhostRenderError::OutsideTable {
+                            theta_deg: light.theta_deg,
+                            max_deg: max,
+                        });
+                    }
                     paths
                         .iter()
                         .map(|&p| {

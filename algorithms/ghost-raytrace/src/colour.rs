@@ -10,6 +10,8 @@ use flarebench_sdk::color::{LightSpectrum, SpectralSampling};
 use flarebench_sdk::ghost::GhostPath;
 use flarebench_sdk::system::SurfaceKind;
 
+use crate::GhostRenderError;
+
 /// Fine wavelength steps the colours are integrated over (5 nm over 380–780 nm).
 const FINE_BANDS: usize = 80;
 
@@ -66,7 +68,7 @@ impl GhostColours {
         light: LightSpectrum,
         band_lambdas: &[f64],
         intensity: f32,
-    ) -> anyhow::Result<Self> {
+    ) -> Result<Self, GhostRenderError> {
         let fine = SpectralSampling::new(FINE_BANDS, light)?;
         let k = band_lambdas.len();
         let width = 400.0 / k as f64;

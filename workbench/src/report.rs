@@ -2,8 +2,8 @@
 
 use serde::Serialize;
 
-use super::plan::{DropReason, LightPlan};
 use flarebench_sdk::ghost::render::GhostStats;
+use ghost_raytrace::plan::{DropReason, LightPlan};
 
 /// Time spent per stage (milliseconds).
 #[derive(Clone, Debug, Default, Serialize)]
@@ -65,7 +65,7 @@ pub struct RenderReport {
     pub lens: String,
     pub width: usize,
     pub height: usize,
-    pub quality: super::scene::Quality,
+    pub quality: ghost_raytrace::scene::Quality,
     pub output: String,
     pub timings: Timings,
     pub rays_traced: usize,

@@ -1,7 +1,11 @@
-//! A flare scene: the lens, its lights, the output frame and the quality preset.
+//! A flare scene's lights and the quality preset.
 
-use anyhow::{Context, bail};
+use std::fmt;
+use std::str::FromStr;
+
 use flarebench_sdk::color::LightSpectrum;
+
+use crate::error::LightSpecError;
 
 /// A light at infinity.
 #[derive(Clone, Debug, PartialEq)]
@@ -17,30 +21,35 @@ pub struct LightSpec {
 impl LightSpec {
     /// Parses `THETA,PHI[,INTENSITY[,KELVIN]]` (degrees; intensity 1; daylight D65 unless a
     /// blackbody temperature is given).
-    pub fn parse(s: &str) -> anyhow::Result<LightSpec> {
+    pub fn parse(s: &str) -> Result<LightSpec, LightSpecError> {
         let parts: Vec<&str> = s.split(',').map(str::trim).collect();
         if !(2..=4).contains(&parts.len()) {
-            bail!("--light takes THETA,PHI[,INTENSITY[,KELVIN]] (degrees), got `{s}`");
+            return Err(LightSpecError::Shape(s.to_string()));
         }
-        let num = |i: usize, what: &str| -> anyhow::Result<f64> {
-            let v: f64 = parts[i]
-                .parse()
-                .with_context(|| format!("--light `{s}`: {what} `{}` is not a number", parts[i]))?;
-            anyhow::ensure!(v.is_finite(), "--light `{s}`: {what} must be finite");
-            Ok(v)
+        let num = |i: usize, what: &'static str| -> Result<f64, LightSpecError> {
+            parts[i]
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| LightSpecError::NotANumber {
+                    spec: s.to_string(),
+                    what,
+                    value: parts[i].to_string(),
+                })
         };
         let theta_deg = num(0, "THETA")?;
-        anyhow::ensure!(
-            (0.0..90.0).contains(&theta_deg),
-            "--light `{s}`: THETA must be in [0, 90) degrees"
-        );
+        if !(0.0..90.0).contains(&theta_deg) {
+            return Err(LightSpecError::Theta(s.to_string()));
+        }
         let phi_deg = num(1, "PHI")?;
         let intensity = if parts.len() > 2 {
             num(2, "INTENSITY")?
         } else {
             1.0
         };
-        anyhow::ensure!(intensity > 0.0, "--light `{s}`: INTENSITY must be positive");
+        if intensity <= 0.0 {
+            return Err(LightSpecError::Intensity(s.to_string()));
+        }
         let spectrum = if parts.len() > 3 {
             LightSpectrum::Blackbody {
                 kelvin: num(3, "KELVIN")?,
@@ -50,7 +59,10 @@ impl LightSpec {
         };
         spectrum
             .validate()
-            .with_context(|| format!("--light `{s}`"))?;
+            .map_err(|source| LightSpecError::Spectrum {
+                spec: s.to_string(),
+                source,
+            })?;
         Ok(LightSpec {
             theta_deg,
             phi_deg,
@@ -60,8 +72,15 @@ impl LightSpec {
     }
 }
 
+impl FromStr for LightSpec {
+    type Err = LightSpecError;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        LightSpec::parse(s)
+    }
+}
+
 /// Speed against accuracy.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Quality {
     Fast,
@@ -70,6 +89,18 @@ pub enum Quality {
 }
 
 impl Quality {
+    /// Every preset, fastest first.
+    pub const ALL: [Quality; 3] = [Quality::Fast, Quality::Default, Quality::High];
+
+    /// The preset's name as written on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Quality::Fast => "fast",
+            Quality::Default => "default",
+            Quality::High => "high",
+        }
+    }
+
     /// Wavelength bands traced (before planning merges bands whose dispersion is invisible).
     /// Default 7: ghosts' colour fringes need several bands; 7 stratified bands keep the
     /// colour error of a smooth spectrum under a few per cent.
@@ -100,6 +131,22 @@ impl Quality {
     }
 }
 
+impl fmt::Display for Quality {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for Quality {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Quality::ALL
+            .into_iter()
+            .find(|q| q.name().eq_ignore_ascii_case(s.trim()))
+            .ok_or_else(|| format!("quality `{s}` is not one of fast, default, high"))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -114,5 +161,13 @@ mod tests {
         for bad in ["10", "a,b", "95,0", "10,0,-1", "10,0,1,2,3", "10,nan"] {
             assert!(LightSpec::parse(bad).is_err(), "{bad}");
         }
+    }
+
+    #[test]
+    fn quality_names_round_trip() {
+        for q in Quality::ALL {
+            assert_eq!(q.name().parse::<Quality>(), Ok(q));
+        }
+        assert!("best".parse::<Quality>().is_err());
     }
 }

@@ -1,0 +1,18 @@
+//! Ghost flares by sparse ray grids (Hullin et al. 2011): for a lens and a scene of lights,
+//! plan which ghosts and wavelengths are needed, trace each ghost's grid and rasterize it into
+//! a linear HDR image.
+//!
+//! - [`scene`]: lights and quality presets.
+//! - [`plan`]: which ghosts and wavelengths each light needs, and what is left out (with its
+//!   energy share).
+//! - [`colour`]: each ghost's colour per traced band, integrated in 5 nm steps.
+//! - [`ghosts`]: carrying out a plan into a linear HDR image.
+//! - [`error`]: what can go wrong.
+
+pub mod colour;
+pub mod error;
+pub mod ghosts;
+pub mod plan;
+pub mod scene;
+
+pub use error::GhostRenderError;
