@@ -7,12 +7,14 @@
 //!   energy share).
 //! - [`colour`]: each ghost's colour per traced band, integrated in 5 nm steps.
 //! - [`ghosts`]: carrying out a plan into a linear HDR image.
+//! - [`reference`]: the dense reference renderer behind every error figure.
 //! - [`error`]: what can go wrong.
 
 pub mod colour;
 pub mod error;
 pub mod ghosts;
 pub mod plan;
+pub mod reference;
 pub mod scene;
 
 pub use error::GhostRenderError;

@@ -96,6 +96,20 @@ pub struct PlanOptions<'a> {
     pub all_bands: bool,
 }
 
+impl<'a> PlanOptions<'a> {
+    /// The preset's bands, grid scale and culling, with bounds from `precomputed` if given.
+    pub fn for_quality(quality: Quality, precomputed: Option<&'a BoundsTable>) -> Self {
+        PlanOptions {
+            quality,
+            bands: quality.bands(),
+            cull: true,
+            grid_scale: quality.grid_scale(),
+            precomputed,
+            all_bands: false,
+        }
+    }
+}
+
 /// Plans every light of a scene.
 pub fn plan(
     system: &LensSystem,
@@ -206,8 +220,8 @@ pub fn plan(
                 } else {
                     vec![colours.merged_colour(path, bands / 2)]
                 };
-                let grid = ((b.grid as f64 * grid_scale).round() as usize)
-                    .clamp(MIN_GRID / 2, MAX_GRID * 4);
+                let cap = (MAX_GRID as f64 * grid_scale.max(1.0)).ceil() as usize;
+                let grid = ((b.grid as f64 * grid_scale).round() as usize).clamp(MIN_GRID / 2, cap);
                 ghosts.push(GhostJob {
                     path,
                     bounds: b,

@@ -9,6 +9,7 @@ use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::ghost::render::Frame;
 
 use ghost_raytrace::plan::PlanOptions;
+use ghost_raytrace::reference::reference_image;
 use ghost_raytrace::scene::{LightSpec, Quality};
 use ghost_raytrace::{ghosts, plan};
 
@@ -131,14 +132,7 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
 
     let t = Instant::now();
     let q = args.quality;
-    let opts = PlanOptions {
-        quality: q,
-        bands: q.bands(),
-        cull: true,
-        grid_scale: q.grid_scale(),
-        precomputed: table.as_ref(),
-        all_bands: false,
-    };
+    let opts = PlanOptions::for_quality(q, table.as_ref());
     let plans = plan::plan(sys, &args.lights, &frame, &opts)?;
     timings.plan_ms = ms(t);
 
@@ -203,30 +197,6 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The reference: every ghost that has light, 31 bands, grids four times finer (at least 96).
-pub fn reference_image(
-    sys: &flarebench_sdk::LensSystem,
-    aperture: &Aperture,
-    frame: Frame,
-    lights: &[LightSpec],
-) -> anyhow::Result<flarebench_sdk::image::HdrImage> {
-    let opts = PlanOptions {
-        quality: Quality::High,
-        bands: REFERENCE_BANDS,
-        cull: false,
-        grid_scale: 4.0,
-        precomputed: None,
-        all_bands: true,
-    };
-    let mut plans = plan::plan(sys, lights, &frame, &opts)?;
-    for lp in &mut plans {
-        for g in &mut lp.ghosts {
-            g.grid = g.grid.max(REFERENCE_MIN_GRID);
-        }
-    }
-    Ok(ghosts::render(sys, aperture, frame, &plans)?.0)
-}
-
 /// Exposure (stops) that maps the 99.9th percentile of the lit pixels' luminance to 1;
 /// 0 for an empty image.
 fn auto_exposure(img: &flarebench_sdk::image::HdrImage) -> f32 {
@@ -243,7 +213,3 @@ fn auto_exposure(img: &flarebench_sdk::image::HdrImage) -> f32 {
     let (_, &mut p, _) = lum.select_nth_unstable_by(k, f32::total_cmp);
     -p.log2()
 }
-
-/// Bands and smallest grid of the reference renderer.
-pub const REFERENCE_BANDS: usize = 31;
-pub const REFERENCE_MIN_GRID: usize = 96;
