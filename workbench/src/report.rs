@@ -30,6 +30,8 @@ pub struct ErrorReport {
 pub struct GhostLine {
     pub ghost: String,
     pub grid: usize,
+    /// Coarse-frame factor the ghost was drawn at (1: full resolution).
+    pub downscale: usize,
     pub spectral: bool,
     pub energy_share: f64,
     pub rays: usize,
@@ -89,6 +91,7 @@ impl LightReport {
             .map(|(g, s)| GhostLine {
                 ghost: g.path.to_string(),
                 grid: g.grid,
+                downscale: g.downscale,
                 spectral: g.spectral,
                 energy_share: g.energy_share,
                 rays: s.rays,
@@ -154,11 +157,12 @@ impl RenderReport {
             );
             for g in l.ghosts.iter().take(5) {
                 s += &format!(
-                    "  ghost {:>6}: energy {:.3e}, grid {}², {}\n",
+                    "  ghost {:>6}: energy {:.3e}, grid {}², {}, drawn at 1/{}\n",
                     g.ghost,
                     g.energy_share,
                     g.grid,
-                    if g.spectral { "spectral" } else { "one band" }
+                    if g.spectral { "spectral" } else { "one band" },
+                    g.downscale
                 );
             }
         }

@@ -43,6 +43,10 @@ pub struct RenderArgs {
     /// Blade roundness, 0 (straight) to 1 (a circle).
     #[arg(long, default_value_t = 0.0)]
     pub iris_roundness: f64,
+    /// Largest factor by which a large, smooth ghost may be drawn coarser than the output
+    /// (a power of two; 1 draws every ghost at full resolution). See docs/performance.md.
+    #[arg(long, default_value_t = ghost_raytrace::plan::MAX_DOWNSCALE, value_parser = parse_downscale)]
+    pub max_downscale: usize,
     /// Ghost bounds from `flarebench precompute` (else traced for each light).
     #[arg(long)]
     pub precomputed: Option<PathBuf>,
@@ -85,6 +89,13 @@ fn parse_size(s: &str) -> Result<(usize, usize), String> {
         ));
     }
     Ok((w, h))
+}
+
+fn parse_downscale(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(f) if f.is_power_of_two() && f <= 64 => Ok(f),
+        _ => Err(format!("`{s}` is not a power of two from 1 to 64")),
+    }
 }
 
 fn ms(t: Instant) -> f64 {
@@ -132,7 +143,10 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
 
     let t = Instant::now();
     let q = args.quality;
-    let opts = PlanOptions::for_quality(q, table.as_ref());
+    let opts = PlanOptions {
+        max_downscale: args.max_downscale,
+        ..PlanOptions::for_quality(q, table.as_ref())
+    };
     let plans = plan::plan(sys, &args.lights, &frame, &opts)?;
     timings.plan_ms = ms(t);
 
