@@ -33,6 +33,8 @@ pub struct GhostLine {
     /// Coarse-frame factor the ghost was drawn at (1: full resolution).
     pub downscale: usize,
     pub spectral: bool,
+    /// Wavelengths the ghost was traced at.
+    pub bands: usize,
     pub energy_share: f64,
     pub rays: usize,
     pub triangles: usize,
@@ -92,7 +94,8 @@ impl LightReport {
                 ghost: g.path.to_string(),
                 grid: g.grid,
                 downscale: g.downscale,
-                spectral: g.spectral,
+                spectral: g.spectral(),
+                bands: g.bands.len(),
                 energy_share: g.energy_share,
                 rays: s.rays,
                 triangles: s.triangles,
@@ -157,11 +160,12 @@ impl RenderReport {
             );
             for g in l.ghosts.iter().take(5) {
                 s += &format!(
-                    "  ghost {:>6}: energy {:.3e}, grid {}², {}, drawn at 1/{}\n",
+                    "  ghost {:>6}: energy {:.3e}, grid {}², {} band{}, drawn at 1/{}\n",
                     g.ghost,
                     g.energy_share,
                     g.grid,
-                    if g.spectral { "spectral" } else { "one band" },
+                    g.bands,
+                    if g.bands == 1 { "" } else { "s" },
                     g.downscale
                 );
             }

@@ -96,20 +96,14 @@ fn render_group(
                     phi: lp.light.phi_deg.to_radians(),
                     irradiance: 1.0,
                 };
-                // A spectral ghost traces every band; another traces the merged band in its
-                // own colour.
-                let bands: Vec<BandRef<'_>> = if job.spectral {
-                    lp.bands
-                        .iter()
-                        .zip(&job.band_rgb)
-                        .map(|(b, &rgb)| BandRef { rgb, ..b.as_ref() })
-                        .collect()
-                } else {
-                    vec![BandRef {
-                        rgb: job.band_rgb[0],
-                        ..lp.merged.as_ref()
-                    }]
-                };
+                let bands: Vec<BandRef<'_>> = job
+                    .bands
+                    .iter()
+                    .map(|b| BandRef {
+                        rgb: b.rgb,
+                        ..lp.bands[b.band].as_ref()
+                    })
+                    .collect();
                 let s = render_ghost(
                     ctx,
                     job.path,

@@ -29,9 +29,6 @@ pub struct LightPlan {
     pub light: LightSpec,
     /// Every band of the light's spectral sampling.
     pub bands: Vec<Band>,
-    /// All bands merged into one (middle wavelength, summed colour), for ghosts whose
-    /// dispersion does not show.
-    pub merged: Band,
     pub ghosts: Vec<GhostJob>,
     pub dropped: Vec<DroppedGhost>,
 }
@@ -47,12 +44,39 @@ pub struct GhostJob {
     /// The ghost is drawn into a coarse copy of the frame with this many pixels a side per
     /// coarse pixel (a power of two; 1 = full resolution): see [`coarse_factor`].
     pub downscale: usize,
-    /// True when traced at every band, false when at the merged band only.
-    pub spectral: bool,
-    /// The ghost's colour at each band (spectral), or at the merged band alone: see
-    /// [`super::colour`].
-    pub band_rgb: Vec<[f32; 3]>,
+    /// The wavelengths the ghost is traced at: groups of neighbouring bands, each traced once
+    /// at its middle band in the group's summed colour ([`band_groups`]).
+    pub bands: Vec<GhostBand>,
     pub energy_share: f64,
+}
+
+/// One traced wavelength of a ghost.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct GhostBand {
+    /// Index into [`LightPlan::bands`] of the band traced (its wavelength and tables).
+    pub band: usize,
+    /// The colour it adds: the ghost's colour over the bands it stands for
+    /// ([`GhostColours::group_colour`]).
+    pub rgb: [f32; 3],
+}
+
+impl GhostJob {
+    /// True when traced at more than one wavelength.
+    pub fn spectral(&self) -> bool {
+        self.bands.len() > 1
+    }
+}
+
+/// Splits `k` bands into `m` (1 ≤ m ≤ k) contiguous groups of as equal size as can be; each
+/// group with the band it is traced at (its middle).
+pub fn band_groups(k: usize, m: usize) -> Vec<(std::ops::Range<usize>, usize)> {
+    let m = m.clamp(1, k.max(1));
+    (0..m)
+        .map(|g| {
+            let (a, b) = (g * k / m, (g + 1) * k / m);
+            (a..b, (a + b) / 2)
+        })
+        .collect()
 }
 
 /// Why a ghost was left out.
@@ -145,11 +169,6 @@ pub fn plan(
                 .zip(sampling.weights())
                 .map(|(&l, &rgb)| Band::new(system, l, rgb.map(|c| c * light.intensity as f32)))
                 .collect();
-            let mid = sampling.wavelengths_nm()[bands / 2];
-            let sum = band_list.iter().fold([0f32; 3], |a, b| {
-                [a[0] + b.rgb[0], a[1] + b.rgb[1], a[2] + b.rgb[2]]
-            });
-            let merged = Band::new(system, mid, sum);
             let colours = GhostColours::new(
                 system,
                 light.spectrum,
@@ -221,13 +240,6 @@ pub fn plan(
                     dropped.push(drop(DropReason::OffFrame));
                     continue;
                 }
-                let spectral = bands > 1
-                    && (all_bands || dispersion_px(system, path, theta, lo, hi, frame) >= 0.5);
-                let band_rgb = if spectral {
-                    colours.band_colours(path)
-                } else {
-                    vec![colours.merged_colour(path, bands / 2)]
-                };
                 let cap = (MAX_GRID as f64 * grid_scale.max(1.0)).ceil() as usize;
                 let grid = ((b.grid as f64 * grid_scale).round() as usize).clamp(MIN_GRID / 2, cap);
                 let downscale = coarse_factor(
@@ -237,20 +249,37 @@ pub fn plan(
                     max_downscale,
                     quality.coarse_pixels_per_radius(),
                 );
+                // Enough bands that neighbouring ones move the ghost by at most half a drawn
+                // pixel: m bands over a dispersion of D drawn pixels step D/(m − 1).
+                let groups = if all_bands {
+                    bands
+                } else {
+                    let d = dispersion_px(system, path, theta, lo, hi, frame) / downscale as f64;
+                    if d.is_finite() {
+                        ((2.0 * d).ceil() as usize + 1).min(bands)
+                    } else {
+                        bands
+                    }
+                };
+                let ghost_bands = band_groups(bands, groups)
+                    .into_iter()
+                    .map(|(group, band)| GhostBand {
+                        band,
+                        rgb: colours.group_colour(path, group, band),
+                    })
+                    .collect();
                 ghosts.push(GhostJob {
                     path,
                     bounds: b,
                     grid,
                     downscale,
-                    spectral,
-                    band_rgb,
+                    bands: ghost_bands,
                     energy_share: b.energy_share,
                 });
             }
             Ok(LightPlan {
                 light: light.clone(),
                 bands: band_list,
-                merged,
                 ghosts,
                 dropped,
             })

@@ -1,5 +1,6 @@
 //! Command-line interface: argument parsing and dispatch.
 
+mod bench;
 mod convert;
 mod info;
 mod precompute;
@@ -31,6 +32,8 @@ pub enum Command {
     Render(render::RenderArgs),
     /// Trace one collimated ray through a lens and show every surface it meets.
     Trace(trace::TraceArgs),
+    /// Time ghost rendering per lens and quality preset, with the error against the reference.
+    Bench(bench::BenchArgs),
     /// Read a lens file (.xml, Zemax .zmx, PBRT .dat) and write it as flarebench XML.
     Convert(convert::ConvertArgs),
 }
@@ -44,6 +47,7 @@ pub fn main() -> ExitCode {
         Command::Render(a) => render::run(a, cli.quiet),
         Command::Precompute(a) => precompute::run(a, cli.quiet),
         Command::Convert(a) => convert::run(a, cli.quiet),
+        Command::Bench(a) => bench::run(a, cli.quiet),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

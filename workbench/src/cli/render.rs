@@ -71,7 +71,18 @@ pub struct RenderArgs {
     pub json: bool,
 }
 
-fn parse_size(s: &str) -> Result<(usize, usize), String> {
+/// The output frame: `size` pixels spanning the film's width, the height following the
+/// aspect ratio.
+pub(crate) fn frame_for(sys: &flarebench_sdk::LensSystem, (w, h): (usize, usize)) -> Frame {
+    Frame {
+        width: w,
+        height: h,
+        film_width_mm: sys.film_width_mm,
+        film_height_mm: sys.film_width_mm * h as f64 / w as f64,
+    }
+}
+
+pub(crate) fn parse_size(s: &str) -> Result<(usize, usize), String> {
     let (w, h) = s
         .split_once(['x', 'X'])
         .ok_or_else(|| format!("size `{s}` is not WxH"))?;
@@ -91,7 +102,7 @@ fn parse_size(s: &str) -> Result<(usize, usize), String> {
     Ok((w, h))
 }
 
-fn parse_downscale(s: &str) -> Result<usize, String> {
+pub(crate) fn parse_downscale(s: &str) -> Result<usize, String> {
     match s.trim().parse::<usize>() {
         Ok(f) if f.is_power_of_two() && f <= 64 => Ok(f),
         _ => Err(format!("`{s}` is not a power of two from 1 to 64")),
@@ -108,12 +119,7 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
     let sys = &loaded.system;
     let mut timings = Timings::default();
     let (w, h) = args.size;
-    let frame = Frame {
-        width: w,
-        height: h,
-        film_width_mm: sys.film_width_mm,
-        film_height_mm: sys.film_width_mm * h as f64 / w as f64,
-    };
+    let frame = frame_for(sys, args.size);
     let aperture = if args.iris_blades == 0 {
         Aperture::Circular
     } else {
