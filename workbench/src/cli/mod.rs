@@ -1,6 +1,7 @@
 //! Command-line interface: argument parsing and dispatch.
 
 mod convert;
+mod edit;
 mod info;
 mod precompute;
 mod render;
@@ -33,6 +34,8 @@ pub enum Command {
     Trace(trace::TraceArgs),
     /// Read a lens file (.xml, Zemax .zmx, PBRT .dat) and write it as flarebench XML.
     Convert(convert::ConvertArgs),
+    /// Edit a lens prescription in the terminal (spreadsheet, undo, live analysis).
+    Edit(edit::EditArgs),
 }
 
 /// Runs the command line; errors are printed with their causes.
@@ -44,6 +47,7 @@ pub fn main() -> ExitCode {
         Command::Render(a) => render::run(a, cli.quiet),
         Command::Precompute(a) => precompute::run(a, cli.quiet),
         Command::Convert(a) => convert::run(a, cli.quiet),
+        Command::Edit(a) => edit::run(a, cli.quiet),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
