@@ -165,7 +165,10 @@ fn rows_insert_duplicate_delete_and_move_with_undo() {
     assert_eq!(app.doc.system(), &original);
     key(&mut app, KeyCode::Char('y'));
     assert_eq!(app.doc.system().surfaces[1], original.surfaces[0]);
-    assert!(matches!(app.focus, Focus::Cell { row: 1, .. }), "on the copy");
+    assert!(
+        matches!(app.focus, Focus::Cell { row: 1, .. }),
+        "on the copy"
+    );
     key(&mut app, KeyCode::Char('u'));
     assert_eq!(app.doc.system(), &original);
     // Move surface 1 down: it swaps with surface 2 and the selection follows.
@@ -209,7 +212,10 @@ fn the_selected_ghost_path_is_traced() {
     assert_eq!((g.first, g.second), (1, 0));
     assert!(!app.ghost_rays.is_empty());
     // The path goes back toward the object after the first reflection (z decreases).
-    let reverses = app.ghost_rays.iter().any(|l| l.windows(2).any(|w| w[1].0 < w[0].0));
+    let reverses = app
+        .ghost_rays
+        .iter()
+        .any(|l| l.windows(2).any(|w| w[1].0 < w[0].0));
     assert!(reverses);
     insta::assert_snapshot!("ghost_1_0", screen(&app));
     key(&mut app, KeyCode::Char('['));
@@ -296,7 +302,10 @@ fn quitting_with_unsaved_changes_asks() {
     assert!(!ctrl(&mut app, 'c'));
     assert!(key(&mut app, KeyCode::Char('d')), "discard and quit");
     assert!(!files::recovery_path(&path).exists());
-    assert_eq!(read_lens(&path).unwrap().system, open(&path).doc.system().clone());
+    assert_eq!(
+        read_lens(&path).unwrap().system,
+        open(&path).doc.system().clone()
+    );
     // Save and quit.
     let mut app = open(&path);
     key(&mut app, KeyCode::Char('O'));
@@ -339,7 +348,13 @@ fn mouse_clicks_select_cells() {
     let mut app = open(&lens_copy("mouse", "heliar-tronnier"));
     // Table at x 0, y 2; first surface row at y 4; cells start at x 5
     // (border, 3-wide row number, space); thickness is the third column (7 + 1 + 9 + 1).
-    dispatch(&mut app, Action::Click { x: 5 + 18, y: 4 + 3 });
+    dispatch(
+        &mut app,
+        Action::Click {
+            x: 5 + 18,
+            y: 4 + 3,
+        },
+    );
     assert_eq!(app.focus, Focus::Cell { row: 3, col: 2 });
     dispatch(&mut app, Action::Click { x: 2, y: 1 });
     assert_eq!(app.focus, Focus::Header(0));
@@ -350,7 +365,13 @@ fn mouse_clicks_select_cells() {
 #[test]
 fn long_lenses_scroll() {
     let mut app = open(&lens_copy("scroll", "nikon-zoom-mid"));
-    dispatch(&mut app, Action::Resize { width: 120, height: 30 });
+    dispatch(
+        &mut app,
+        Action::Resize {
+            width: 120,
+            height: 30,
+        },
+    );
     key(&mut app, KeyCode::Char('G'));
     let rows = view::table_rows(app.size);
     assert_eq!(app.scroll, app.doc.system().surfaces.len() - rows);
@@ -361,8 +382,8 @@ fn long_lenses_scroll() {
 
 #[test]
 fn the_key_map_is_documented() {
-    let doc = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/editor.md"))
-        .unwrap();
+    let doc =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/editor.md")).unwrap();
     for (keys, what) in KEY_HELP {
         let row = format!("| {keys} | {what} |");
         assert!(doc.contains(&row), "docs/editor.md lacks `{row}`");

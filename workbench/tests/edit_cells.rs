@@ -23,12 +23,28 @@ fn lens_surface() -> Surface {
 #[test]
 fn numbers_are_parsed_and_ranges_checked() {
     let s = lens_surface();
-    assert_eq!(parse_cell(&s, Column::Thickness, " 7.25 ").unwrap().thickness, 7.25);
-    assert_eq!(parse_cell(&s, Column::Radius, "-20").unwrap().curvature, -0.05);
-    assert_eq!(parse_cell(&s, Column::Radius, "flat").unwrap().curvature, 0.0);
+    assert_eq!(
+        parse_cell(&s, Column::Thickness, " 7.25 ")
+            .unwrap()
+            .thickness,
+        7.25
+    );
+    assert_eq!(
+        parse_cell(&s, Column::Radius, "-20").unwrap().curvature,
+        -0.05
+    );
+    assert_eq!(
+        parse_cell(&s, Column::Radius, "flat").unwrap().curvature,
+        0.0
+    );
     assert_eq!(parse_cell(&s, Column::Radius, "0").unwrap().curvature, 0.0);
     assert_eq!(parse_cell(&s, Column::Conic, "-1").unwrap().conic, -1.0);
-    assert_eq!(parse_cell(&s, Column::SemiDiameter, "12").unwrap().semi_diameter, 12.0);
+    assert_eq!(
+        parse_cell(&s, Column::SemiDiameter, "12")
+            .unwrap()
+            .semi_diameter,
+        12.0
+    );
     for (col, text, needle) in [
         (Column::Thickness, "abc", "not a number"),
         (Column::Thickness, "-1", "≥ 0"),
@@ -89,7 +105,11 @@ fn nd_and_vd_cells_turn_the_medium_into_a_model_glass() {
     let edited = parse_cell(&edited, Column::Vd, "-").unwrap();
     assert_eq!(edited.medium, Medium::Model { nd: 1.6, vd: None });
     let air = Surface::spherical(0.0, 1.0, Medium::Air, 5.0);
-    assert!(parse_cell(&air, Column::Vd, "50").unwrap_err().contains("air"));
+    assert!(
+        parse_cell(&air, Column::Vd, "50")
+            .unwrap_err()
+            .contains("air")
+    );
 }
 
 #[test]
@@ -97,7 +117,10 @@ fn completion_lists_catalogue_names() {
     let names = glass_completions("N-BK", 64);
     assert!(names.contains(&"SCHOTT:N-BK7".to_string()), "{names:?}");
     assert!(names.iter().all(|n| n.contains(":N-BK")), "{names:?}");
-    assert!(glass_completions("1.5", 8).is_empty(), "numbers are not glass names");
+    assert!(
+        glass_completions("1.5", 8).is_empty(),
+        "numbers are not glass names"
+    );
     assert_eq!(glass_completions("N-BK", 2).len(), 2);
 }
 
@@ -129,7 +152,11 @@ fn every_cell_parses_back_to_itself() {
         ..lens_surface()
     };
     for col in Column::ALL {
-        assert_eq!(parse_cell(&s, col, &edit_text(&s, col)).unwrap(), s, "{col:?}");
+        assert_eq!(
+            parse_cell(&s, col, &edit_text(&s, col)).unwrap(),
+            s,
+            "{col:?}"
+        );
     }
 }
 
@@ -141,12 +168,27 @@ fn header_fields() {
         film_width_mm: 36.0,
         film_height_mm: 24.0,
     };
-    assert_eq!(parse_header(&h, HeaderField::FNumber, "open").unwrap().f_number, None);
-    assert_eq!(parse_header(&h, HeaderField::FNumber, "5.6").unwrap().f_number, Some(5.6));
+    assert_eq!(
+        parse_header(&h, HeaderField::FNumber, "open")
+            .unwrap()
+            .f_number,
+        None
+    );
+    assert_eq!(
+        parse_header(&h, HeaderField::FNumber, "5.6")
+            .unwrap()
+            .f_number,
+        Some(5.6)
+    );
     assert!(parse_header(&h, HeaderField::FNumber, "0").is_err());
     assert!(parse_header(&h, HeaderField::FilmWidth, "-3").is_err());
     assert!(parse_header(&h, HeaderField::Name, "  ").is_err());
-    assert_eq!(parse_header(&h, HeaderField::FilmHeight, "15.6").unwrap().film_height_mm, 15.6);
+    assert_eq!(
+        parse_header(&h, HeaderField::FilmHeight, "15.6")
+            .unwrap()
+            .film_height_mm,
+        15.6
+    );
 }
 
 #[test]

@@ -32,7 +32,10 @@ fn op() -> impl Strategy<Value = Op> {
     let i = 0usize..14;
     prop_oneof![
         (i.clone(), -1.0f64..30.0).prop_map(|(i, t)| Op::Thickness(i, t)),
-        (i.clone(), prop_oneof![Just(0.0), 5.0f64..300.0, -300.0f64..-5.0])
+        (
+            i.clone(),
+            prop_oneof![Just(0.0), 5.0f64..300.0, -300.0f64..-5.0]
+        )
             .prop_map(|(i, r)| Op::Radius(i, r)),
         (i.clone(), 0.5f64..40.0).prop_map(|(i, h)| Op::SemiDiameter(i, h)),
         (i.clone(), 1.4f64..1.95, 20.0f64..90.0).prop_map(|(i, n, v)| Op::Glass(i, n, v)),
@@ -161,9 +164,7 @@ fn refused_edits_name_the_problem() {
     let old = doc.system().surfaces[0].clone();
     let mut new = old.clone();
     new.semi_diameter = 40.0; // R = 30.81 mm
-    let err = doc
-        .apply(Edit::Replace { index: 0, old, new })
-        .unwrap_err();
+    let err = doc.apply(Edit::Replace { index: 0, old, new }).unwrap_err();
     assert!(err.to_string().contains("semi-diameter"), "{err}");
     assert_eq!(doc.revision(), 0);
     assert_eq!(doc.undo_len(), 0);
@@ -198,6 +199,9 @@ fn subscribers_see_every_change() {
         [1, 2, 3]
     );
     assert_eq!(changes[0].system.surfaces[1].thickness, 2.5);
-    assert_eq!(changes[1].system.surfaces[1].thickness, heliar().surfaces[1].thickness);
+    assert_eq!(
+        changes[1].system.surfaces[1].thickness,
+        heliar().surfaces[1].thickness
+    );
     assert_eq!(changes[2].system.as_ref(), doc.system());
 }
