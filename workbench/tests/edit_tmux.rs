@@ -143,3 +143,20 @@ fn edit_a_cell_save_and_quit_in_a_real_terminal() {
     assert_eq!(saved, expected, "only that cell changed");
     assert!(!recovery.exists(), "saving removes the recovery file");
 }
+
+#[test]
+fn without_a_terminal_or_a_lens_the_errors_are_clear() {
+    // Standard output is a pipe here, not a terminal.
+    let out = common::flarebench(&["edit", "heliar-tronnier"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("needs a terminal"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    let out = common::flarebench(&["edit", "no-such-lens"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("could not open lens `no-such-lens`") && err.contains("heliar-tronnier"),
+        "names the bundled lenses: {err}"
+    );
+}
