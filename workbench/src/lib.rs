@@ -4,6 +4,7 @@
 
 pub mod aperture_file;
 pub mod cli;
+#[cfg(feature = "tui")]
 pub mod edit;
 pub mod flare;
 pub mod lens_library;

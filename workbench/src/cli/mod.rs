@@ -1,6 +1,7 @@
 //! Command-line interface: argument parsing and dispatch.
 
 mod convert;
+#[cfg(feature = "tui")]
 mod edit;
 mod info;
 mod precompute;
@@ -35,6 +36,7 @@ pub enum Command {
     /// Read a lens file (.xml, Zemax .zmx, PBRT .dat) and write it as flarebench XML.
     Convert(convert::ConvertArgs),
     /// Edit a lens prescription in the terminal (spreadsheet, undo, live analysis).
+    #[cfg(feature = "tui")]
     Edit(edit::EditArgs),
 }
 
@@ -47,6 +49,7 @@ pub fn main() -> ExitCode {
         Command::Render(a) => render::run(a, cli.quiet),
         Command::Precompute(a) => precompute::run(a, cli.quiet),
         Command::Convert(a) => convert::run(a, cli.quiet),
+        #[cfg(feature = "tui")]
         Command::Edit(a) => edit::run(a, cli.quiet),
     };
     match result {
