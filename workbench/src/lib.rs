@@ -4,6 +4,8 @@
 
 pub mod aperture_file;
 pub mod cli;
+#[cfg(feature = "tui")]
+pub mod edit;
 pub mod lens_library;
 pub mod output;
 pub mod report;

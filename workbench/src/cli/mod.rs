@@ -2,6 +2,8 @@
 
 mod bench;
 mod convert;
+#[cfg(feature = "tui")]
+mod edit;
 mod info;
 mod precompute;
 mod render;
@@ -36,6 +38,9 @@ pub enum Command {
     Bench(bench::BenchArgs),
     /// Read a lens file (.xml, Zemax .zmx, PBRT .dat) and write it as flarebench XML.
     Convert(convert::ConvertArgs),
+    /// Edit a lens prescription in the terminal (spreadsheet, undo, live analysis).
+    #[cfg(feature = "tui")]
+    Edit(edit::EditArgs),
 }
 
 /// Runs the command line; errors are printed with their causes.
@@ -48,6 +53,8 @@ pub fn main() -> ExitCode {
         Command::Precompute(a) => precompute::run(a, cli.quiet),
         Command::Convert(a) => convert::run(a, cli.quiet),
         Command::Bench(a) => bench::run(a, cli.quiet),
+        #[cfg(feature = "tui")]
+        Command::Edit(a) => edit::run(a, cli.quiet),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,162 @@
+//! End to end: the built `flarebench edit` runs in a real terminal (a detached tmux session),
+//! receives keys, edits a cell, saves with Ctrl-s and quits; the file on disk must hold the
+//! edit. Skipped with a message when tmux is not installed locally; under CI (`CI` set) a
+//! missing tmux is a failure, since `.ci/run` installs it.
+
+mod common;
+
+use std::path::Path;
+use std::process::{Command, Output};
+use std::time::{Duration, Instant};
+
+use flarebench_sdk::io::read_lens;
+
+/// A tmux server of this test alone (its own socket name), killed when dropped.
+struct Tmux {
+    socket: String,
+}
+
+impl Tmux {
+    fn run(&self, args: &[&str]) -> Output {
+        Command::new("tmux")
+            .args(["-L", &self.socket, "-f", "/dev/null"])
+            .args(args)
+            .output()
+            .expect("tmux runs")
+    }
+
+    fn pane(&self) -> String {
+        String::from_utf8_lossy(&self.run(&["capture-pane", "-p", "-t", "e2e"]).stdout).into()
+    }
+
+    /// Waits until the pane shows `text`; panics with the pane after 20 s.
+    fn wait_for(&self, text: &str) -> String {
+        let start = Instant::now();
+        loop {
+            let pane = self.pane();
+            if pane.contains(text) {
+                return pane;
+            }
+            assert!(
+                start.elapsed() < Duration::from_secs(20),
+                "the editor never showed `{text}`; the pane:\n{pane}"
+            );
+            std::thread::sleep(Duration::from_millis(100));
+        }
+    }
+
+    fn keys(&self, keys: &[&str]) {
+        for k in keys {
+            let out = self.run(&["send-keys", "-t", "e2e", k]);
+            assert!(out.status.success(), "send-keys {k}: {out:?}");
+        }
+    }
+
+    fn session_alive(&self) -> bool {
+        self.run(&["has-session", "-t", "e2e"]).status.success()
+    }
+}
+
+impl Drop for Tmux {
+    fn drop(&mut self) {
+        let _ = self.run(&["kill-server"]);
+    }
+}
+
+fn tmux_available() -> bool {
+    Command::new("tmux")
+        .arg("-V")
+        .output()
+        .is_ok_and(|o| o.status.success())
+}
+
+#[test]
+fn edit_a_cell_save_and_quit_in_a_real_terminal() {
+    if !tmux_available() {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "tmux is missing under CI: .ci/run should install it"
+        );
+        eprintln!("skipped: tmux is not installed (CI installs it; apt-get install tmux)");
+        return;
+    }
+    let dir = common::temp_dir("edit-tmux");
+    let path = dir.join("heliar-tronnier.xml");
+    std::fs::copy(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../lenses/heliar-tronnier.xml"),
+        &path,
+    )
+    .unwrap();
+    let original = read_lens(&path).unwrap().system;
+    assert_ne!(original.surfaces[1].thickness, 7.5);
+
+    let tmux = Tmux {
+        socket: format!("flarebench-e2e-{}", std::process::id()),
+    };
+    let command = format!(
+        "'{}' edit '{}'",
+        env!("CARGO_BIN_EXE_flarebench"),
+        path.display()
+    );
+    let out = tmux.run(&[
+        "new-session",
+        "-d",
+        "-s",
+        "e2e",
+        "-x",
+        "120",
+        "-y",
+        "40",
+        &command,
+    ]);
+    assert!(out.status.success(), "tmux new-session: {out:?}");
+    tmux.wait_for("flarebench edit — heliar-tronnier.xml");
+
+    // Surface 1, thickness column: edit, clear, type 7.5, accept.
+    tmux.keys(&["j", "l", "Enter", "C-u", "7", ".", "5", "Enter"]);
+    let pane = tmux.wait_for("[modified]");
+    assert!(
+        pane.lines()
+            .any(|l| l.contains("│ 1  refract") && l.contains(" 7.5 ")),
+        "{pane}"
+    );
+    // The recovery file already holds the edit.
+    let recovery = dir.join(".heliar-tronnier.xml.recover");
+    assert!(recovery.exists());
+
+    tmux.keys(&["C-s"]);
+    tmux.wait_for("saved ");
+    tmux.keys(&["q"]);
+    let start = Instant::now();
+    while tmux.session_alive() {
+        assert!(
+            start.elapsed() < Duration::from_secs(20),
+            "the editor did not quit"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+
+    let saved = read_lens(&path).unwrap().system;
+    assert_eq!(saved.surfaces[1].thickness, 7.5);
+    let mut expected = original;
+    expected.surfaces[1].thickness = 7.5;
+    assert_eq!(saved, expected, "only that cell changed");
+    assert!(!recovery.exists(), "saving removes the recovery file");
+}
+
+#[test]
+fn without_a_terminal_or_a_lens_the_errors_are_clear() {
+    // Standard output is a pipe here, not a terminal.
+    let out = common::flarebench(&["edit", "heliar-tronnier"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("needs a terminal"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    let out = common::flarebench(&["edit", "no-such-lens"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("could not open lens `no-such-lens`") && err.contains("heliar-tronnier"),
+        "names the bundled lenses: {err}"
+    );
+}
