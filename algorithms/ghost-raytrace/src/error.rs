@@ -17,7 +17,7 @@ pub enum GhostRenderError {
 /// Why a `--light` specification was refused.
 #[derive(Debug, thiserror::Error)]
 pub enum LightSpecError {
-    #[error("a light takes THETA,PHI[,INTENSITY[,KELVIN]] (degrees), got `{0}`")]
+    #[error("a light takes THETA,PHI[,INTENSITY[,KELVIN or R:G:B]] (degrees), got `{0}`")]
     Shape(String),
     #[error("light `{spec}`: {what} `{value}` is not a finite number")]
     NotANumber {

@@ -19,8 +19,9 @@ pub struct LightSpec {
 }
 
 impl LightSpec {
-    /// Parses `THETA,PHI[,INTENSITY[,KELVIN]]` (degrees; intensity 1; daylight D65 unless a
-    /// blackbody temperature is given).
+    /// Parses `THETA,PHI[,INTENSITY[,COLOUR]]` (degrees; intensity 1; COLOUR a blackbody
+    /// temperature in kelvin, or linear sRGB `R:G:B` (smoothly uplifted to a spectrum);
+    /// daylight D65 when absent).
     pub fn parse(s: &str) -> Result<LightSpec, LightSpecError> {
         let parts: Vec<&str> = s.split(',').map(str::trim).collect();
         if !(2..=4).contains(&parts.len()) {
@@ -50,12 +51,34 @@ impl LightSpec {
         if intensity <= 0.0 {
             return Err(LightSpecError::Intensity(s.to_string()));
         }
-        let spectrum = if parts.len() > 3 {
-            LightSpectrum::Blackbody {
-                kelvin: num(3, "KELVIN")?,
+        let spectrum = match parts.get(3) {
+            None => LightSpectrum::D65,
+            Some(c) if c.contains(':') => {
+                let rgb: Vec<&str> = c.split(':').map(str::trim).collect();
+                if rgb.len() != 3 {
+                    return Err(LightSpecError::NotANumber {
+                        spec: s.to_string(),
+                        what: "COLOUR (R:G:B)",
+                        value: c.to_string(),
+                    });
+                }
+                let mut v = [0f32; 3];
+                for (k, part) in rgb.iter().enumerate() {
+                    v[k] = part
+                        .parse::<f32>()
+                        .ok()
+                        .filter(|x| x.is_finite())
+                        .ok_or_else(|| LightSpecError::NotANumber {
+                            spec: s.to_string(),
+                            what: "COLOUR (R:G:B)",
+                            value: c.to_string(),
+                        })?;
+                }
+                LightSpectrum::Rgb(v)
             }
-        } else {
-            LightSpectrum::D65
+            Some(_) => LightSpectrum::Blackbody {
+                kelvin: num(3, "KELVIN")?,
+            },
         };
         spectrum
             .validate()
@@ -170,7 +193,20 @@ mod tests {
         let l = LightSpec::parse(" 5 , -30 , 2.5 , 3200 ").unwrap();
         assert_eq!(l.intensity, 2.5);
         assert_eq!(l.spectrum, LightSpectrum::Blackbody { kelvin: 3200.0 });
-        for bad in ["10", "a,b", "95,0", "10,0,-1", "10,0,1,2,3", "10,nan"] {
+        let l = LightSpec::parse("1,2,3,1:0.5:0.25").unwrap();
+        assert_eq!(l.spectrum, LightSpectrum::Rgb([1.0, 0.5, 0.25]));
+        for bad in [
+            "10",
+            "a,b",
+            "95,0",
+            "10,0,-1",
+            "10,0,1,2,3",
+            "10,nan",
+            "1,2,3,1:2",
+            "1,2,3,a:b:c",
+            "1,2,3,0:0:0",
+            "1,2,3,-1:1:1",
+        ] {
             assert!(LightSpec::parse(bad).is_err(), "{bad}");
         }
     }

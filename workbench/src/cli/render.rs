@@ -22,9 +22,10 @@ use flarebench_sdk::ghost::table::BoundsTable;
 pub struct RenderArgs {
     /// Lens file or the name of a bundled lens.
     pub lens: String,
-    /// A light at infinity: THETA,PHI[,INTENSITY[,KELVIN]] — angle to the axis and azimuth in
-    /// degrees, irradiance (default 1), blackbody temperature (default: daylight D65).
-    /// Repeat for several lights.
+    /// A light at infinity: THETA,PHI[,INTENSITY[,COLOUR]] — angle to the axis and azimuth in
+    /// degrees, irradiance (default 1), colour as a blackbody temperature in kelvin (e.g.
+    /// 3200) or linear sRGB R:G:B (e.g. 1:0.8:0.6); default daylight D65. Repeat for several
+    /// lights.
     #[arg(long = "light", required = true, value_parser = LightSpec::parse)]
     pub lights: Vec<LightSpec>,
     /// Output size in pixels, WxH. The frame spans the film's width; its height follows the
