@@ -169,3 +169,32 @@ fn bad_render_arguments_are_refused() {
         assert!(!String::from_utf8_lossy(&out.stderr).contains("panicked"));
     }
 }
+
+#[test]
+fn bench_times_each_preset_and_reports_what_it_drew() {
+    let v = json(&[
+        "bench",
+        "heliar-tronnier",
+        "--size",
+        "96x54",
+        "--runs",
+        "2",
+        "--quality",
+        "fast,high",
+        "--json",
+    ]);
+    let rows = v.as_array().unwrap();
+    assert_eq!(rows.len(), 2);
+    for (row, q) in rows.iter().zip(["fast", "high"]) {
+        assert_eq!(row["quality"], q);
+        assert_eq!(row["ghosts_total"], 28);
+        let drawn = row["ghosts_drawn"].as_u64().unwrap();
+        assert!(drawn > 0 && drawn <= 28);
+        for key in ["plan_ms", "render_ms", "frame_ms"] {
+            assert!(row[key].as_f64().unwrap() > 0.0, "{key}");
+        }
+        assert!(row["relative_rmse"].is_null(), "no --error, no error");
+    }
+    // A finer preset keeps at least as many ghosts (its energy threshold is lower).
+    assert!(rows[1]["ghosts_drawn"].as_u64() >= rows[0]["ghosts_drawn"].as_u64());
+}
