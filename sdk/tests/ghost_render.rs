@@ -60,6 +60,7 @@ fn render(
         frame: f,
         stop_radius: stop_opening(sys),
         f_number: 2.8,
+        trace_f64: false,
     };
     let light = GhostLight {
         theta,
@@ -252,6 +253,7 @@ fn stiff_cases_stay_finite() {
                 frame: f,
                 stop_radius: stop_opening(sys),
                 f_number: 2.8,
+                trace_f64: false,
             };
             let light = GhostLight {
                 theta,

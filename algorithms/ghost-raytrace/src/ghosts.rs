@@ -21,6 +21,13 @@ use rayon::prelude::*;
 use crate::GhostRenderError;
 use crate::plan::LightPlan;
 
+/// How to carry out a plan.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RenderOptions {
+    /// Trace the ghosts' grids in f64 rather than f32.
+    pub trace_f64: bool,
+}
+
 /// Renders every planned ghost; returns the image and, per light, each ghost's statistics in
 /// plan order.
 pub fn render(
@@ -28,6 +35,17 @@ pub fn render(
     aperture: &Aperture,
     frame: Frame,
     plans: &[LightPlan],
+) -> Result<(HdrImage, Vec<Vec<GhostStats>>), GhostRenderError> {
+    render_with(system, aperture, frame, plans, RenderOptions::default())
+}
+
+/// [`render`] with options.
+pub fn render_with(
+    system: &LensSystem,
+    aperture: &Aperture,
+    frame: Frame,
+    plans: &[LightPlan],
+    options: RenderOptions,
 ) -> Result<(HdrImage, Vec<Vec<GhostStats>>), GhostRenderError> {
     let p = analyse(system, LAMBDA_D_NM)?;
     let mut jobs: Vec<(usize, usize, usize)> = plans
@@ -51,6 +69,7 @@ pub fn render(
             frame: frame.coarse(&grid),
             stop_radius: stop_opening(system),
             f_number: p.f_number,
+            trace_f64: options.trace_f64,
         };
         let coarse = render_group(&ctx, plans, group, &mut stats);
         add_upsampled(&mut img, &coarse, &grid);

@@ -2,7 +2,7 @@
 //! one path at one wavelength. Nothing is dropped: every vertex keeps its landing point, its
 //! largest relative radius (for feathered clipping) and its Fresnel/coating weight.
 
-use crate::trace::{LANES, RayBatch, Sequence};
+use crate::trace::{LANES, RayBatch, Real, Sequence};
 
 use super::bounds::Rect;
 
@@ -26,6 +26,7 @@ pub struct GridTrace {
     /// values are meaningless.
     pub completed: Vec<bool>,
     batch: RayBatch<f32>,
+    batch64: RayBatch<f64>,
 }
 
 impl GridTrace {
@@ -51,19 +52,50 @@ pub fn trace_grid(
     stop_radius: f64,
     out: &mut GridTrace,
 ) {
+    let mut batch = std::mem::take(&mut out.batch);
+    fill(seq, &mut batch, theta, rect, n, stop_radius, out);
+    out.batch = batch;
+}
+
+/// [`trace_grid`] with the rays traced in f64 (the results are stored in f32 as always): the
+/// check on the f32 tracer's images.
+pub fn trace_grid_f64(
+    seq: &Sequence<f64>,
+    theta: f64,
+    rect: Rect,
+    n: usize,
+    stop_radius: f64,
+    out: &mut GridTrace,
+) {
+    let mut batch = std::mem::take(&mut out.batch64);
+    fill(seq, &mut batch, theta, rect, n, stop_radius, out);
+    out.batch64 = batch;
+}
+
+// Generic over the tracer's float, which CODE_STYLE keeps inside `trace/`: this is the one
+// place outside it, so that the f32 and f64 grids share their code; it stays private.
+fn fill<T: Real>(
+    seq: &Sequence<T>,
+    batch: &mut RayBatch<T>,
+    theta: f64,
+    rect: Rect,
+    n: usize,
+    stop_radius: f64,
+    out: &mut GridTrace,
+) {
     let n = n.max(2);
     let (s, c) = theta.sin_cos();
-    let dir = [0.0, s as f32, c as f32];
-    out.batch.clear();
+    let dir = [T::of(0.0), T::of(s), T::of(c)];
+    batch.clear();
     let d = (n - 1) as f64;
     for j in 0..n {
         let y = rect.y0 + rect.height() * j as f64 / d;
         for i in 0..n {
             let x = rect.x0 + rect.width() * i as f64 / d;
-            out.batch.push([x as f32, y as f32, 0.0], dir);
+            batch.push([T::of(x), T::of(y), T::of(0.0)], dir);
         }
     }
-    seq.trace_batch(&mut out.batch);
+    seq.trace_batch(batch);
     let total = n * n;
     out.n = n;
     out.rect = rect;
@@ -72,15 +104,18 @@ pub fn trace_grid(
     out.max_rel.clear();
     out.weight.clear();
     out.completed.clear();
-    let inv_stop = (1.0 / stop_radius) as f32;
-    for (pi, p) in out.batch.packets().iter().enumerate() {
+    let inv_stop = 1.0 / stop_radius;
+    let f = |v: T| v.to_f64() as f32;
+    for (pi, p) in batch.packets().iter().enumerate() {
         let lanes = LANES.min(total - pi * LANES);
         for l in 0..lanes {
-            out.sensor.push([p.x[l], p.y[l]]);
-            out.stop_uv
-                .push([p.stop_x[l] * inv_stop, p.stop_y[l] * inv_stop]);
-            out.max_rel.push(p.max_rel2[l].sqrt());
-            out.weight.push(p.weight[l]);
+            out.sensor.push([f(p.x[l]), f(p.y[l])]);
+            out.stop_uv.push([
+                (p.stop_x[l].to_f64() * inv_stop) as f32,
+                (p.stop_y[l].to_f64() * inv_stop) as f32,
+            ]);
+            out.max_rel.push(p.max_rel2[l].to_f64().sqrt() as f32);
+            out.weight.push(f(p.weight[l]));
             out.completed.push(p.completed(l));
         }
     }

@@ -17,4 +17,4 @@ pub mod table;
 
 pub use bounds::{GhostBounds, Rect};
 pub use enumerate::{GhostPath, enumerate_ghosts, reflecting_surfaces};
-pub use grid::{GridTrace, trace_grid};
+pub use grid::{GridTrace, trace_grid, trace_grid_f64};

@@ -48,6 +48,9 @@ pub struct RenderArgs {
     /// (a power of two; 1 draws every ghost at full resolution). See docs/performance.md.
     #[arg(long, default_value_t = ghost_raytrace::plan::MAX_DOWNSCALE, value_parser = parse_downscale)]
     pub max_downscale: usize,
+    /// Trace the ghosts in f64 instead of f32 (slower; for checking precision).
+    #[arg(long)]
+    pub f64: bool,
     /// Ghost bounds from `flarebench precompute` (else traced for each light).
     #[arg(long)]
     pub precomputed: Option<PathBuf>,
@@ -158,7 +161,15 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
     timings.plan_ms = ms(t);
 
     let t = Instant::now();
-    let (img, stats) = ghosts::render(sys, &aperture, frame, &plans)?;
+    let (img, stats) = ghosts::render_with(
+        sys,
+        &aperture,
+        frame,
+        &plans,
+        ghosts::RenderOptions {
+            trace_f64: args.f64,
+        },
+    )?;
     timings.render_ms = ms(t);
     anyhow::ensure!(
         !img.has_non_finite(),

@@ -1,0 +1,59 @@
+//! Ghost images traced in f32 agree with the same images traced in f64.
+
+use flarebench_sdk::aperture::Aperture;
+use flarebench_sdk::ghost::render::Frame;
+use flarebench_sdk::io::read_lens;
+use ghost_raytrace::ghosts::{RenderOptions, render_with};
+use ghost_raytrace::plan::{PlanOptions, plan};
+use ghost_raytrace::scene::{LightSpec, Quality};
+
+fn compare(lens: &str, light: &str) -> (f64, f64) {
+    let path = format!("{}/../../lenses/{lens}.xml", env!("CARGO_MANIFEST_DIR"));
+    let sys = read_lens(std::path::Path::new(&path)).unwrap().system;
+    let frame = Frame {
+        width: 320,
+        height: 180,
+        film_width_mm: sys.film_width_mm,
+        film_height_mm: sys.film_width_mm * 180.0 / 320.0,
+    };
+    let lights = [LightSpec::parse(light).unwrap()];
+    let plans = plan(
+        &sys,
+        &lights,
+        &frame,
+        &PlanOptions::for_quality(Quality::Default, None),
+    )
+    .unwrap();
+    let render = |trace_f64| {
+        render_with(
+            &sys,
+            &Aperture::Circular,
+            frame,
+            &plans,
+            RenderOptions { trace_f64 },
+        )
+        .unwrap()
+        .0
+    };
+    let (single, double) = (render(false), render(true));
+    assert!(!single.has_non_finite() && !double.has_non_finite());
+    let c = single.compare(&double).unwrap();
+    eprintln!(
+        "{lens} at {light}: f32 vs f64 relative RMSE {:.2e}, energy {:.2e}",
+        c.relative_rmse, c.energy_error
+    );
+    (c.relative_rmse, c.energy_error)
+}
+
+#[test]
+fn f32_ghost_images_match_f64() {
+    for (lens, light) in [
+        ("heliar-tronnier", "10,30"),
+        ("nikon-zoom-short", "10,30"),
+        ("fisheye-10mm", "60,0"),
+    ] {
+        let (rmse, energy) = compare(lens, light);
+        assert!(rmse < 1e-3, "{lens}: relative RMSE {rmse}");
+        assert!(energy.abs() < 1e-4, "{lens}: energy {energy}");
+    }
+}
