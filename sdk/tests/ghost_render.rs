@@ -1,5 +1,6 @@
 //! Rendering ghosts: analytic plate ghost, symmetry, energy, robustness.
 
+use std::f64::consts::FRAC_PI_2;
 use std::path::Path;
 
 use flarebench_sdk::aperture::Aperture;
@@ -48,6 +49,18 @@ fn render(
     px: usize,
     aperture: &Aperture,
 ) -> (HdrImage, GhostBounds) {
+    render_at(sys, path, theta, 0.0, n, px, aperture)
+}
+
+fn render_at(
+    sys: &LensSystem,
+    path: GhostPath,
+    theta: f64,
+    phi: f64,
+    n: usize,
+    px: usize,
+    aperture: &Aperture,
+) -> (HdrImage, GhostBounds) {
     let mut scratch = GridTrace::default();
     let tables = InterfaceTableSet::for_system(sys, 550.0);
     let direct = bounds::direct_flux(sys, &tables, theta, &mut scratch);
@@ -64,7 +77,7 @@ fn render(
     };
     let light = GhostLight {
         theta,
-        phi: 0.0,
+        phi,
         irradiance: 1.0,
     };
     let band = Band::new(sys, 550.0, [1.0, 1.0, 1.0]);
@@ -187,6 +200,48 @@ fn on_axis_ghosts_are_rotationally_symmetric() {
         let d = t.relative_l1(&img).unwrap();
         assert!(d < 0.02, "{path}: transpose differs by {d}");
     }
+}
+
+/// The iris is fixed to the lens: turning the light's azimuth and the iris by the same 90°
+/// turns the ghost image by 90° (a five-blade iris, which a quarter turn does not map onto
+/// itself, so a ghost whose iris followed the light would fail).
+#[test]
+fn the_iris_stays_with_the_lens_as_the_light_turns() {
+    let sys = plate();
+    let path = GhostPath {
+        first: 2,
+        second: 1,
+    };
+    let iris = |rotation_rad: f64| Aperture::Iris {
+        blades: 5,
+        rotation_rad,
+        roundness: 0.0,
+    };
+    let px = 128;
+    let theta = 3f64.to_radians();
+    let (a, _) = render_at(&sys, path, theta, 0.0, 48, px, &iris(0.2));
+    let (b, _) = render_at(&sys, path, theta, FRAC_PI_2, 48, px, &iris(0.2 + FRAC_PI_2));
+    let (wrong, _) = render_at(&sys, path, theta, FRAC_PI_2, 48, px, &iris(0.2));
+    // Turning the photograph by 90° about its centre: sensor (x, y) → (−y, x) becomes pixel
+    // (i, j) → (j, px − 1 − i) here (x to the left, y down).
+    let turn = |img: &HdrImage| {
+        let mut t = HdrImage::new(px, px);
+        for j in 0..px {
+            for i in 0..px {
+                *t.get_mut(j, px - 1 - i).unwrap() = img.get(i, j).unwrap();
+            }
+        }
+        t
+    };
+    let ta = turn(&a);
+    let (d, d_wrong) = (b.relative_l1(&ta).unwrap(), wrong.relative_l1(&ta).unwrap());
+    eprintln!("turned together: {d:.2e}; iris not turned: {d_wrong:.2e}");
+    assert!(a.sum()[0] > 0.0);
+    assert!(d < 0.01, "turning light and iris together: {d}");
+    assert!(
+        d_wrong > 5.0 * d.max(1e-3),
+        "the iris must matter: {d_wrong}"
+    );
 }
 
 /// A six-blade iris makes six-fold ghosts: rotating the iris by 60° leaves the image alone,

@@ -220,6 +220,13 @@ pub fn render_ghost(
             let [x, y] = g.sensor[k].map(f64::from);
             [x * cphi - y * sphi, x * sphi + y * cphi]
         };
+        // The stop crossing in the lens's frame, where the aperture's shape is fixed (the grid is
+        // traced with the light in the y–z plane; the lens frame is that turned by φ).
+        let (s32, c32) = (sphi as f32, cphi as f32);
+        let stop_uv = |k: usize| {
+            let [u, v] = g.stop_uv[k];
+            [u * c32 - v * s32, u * s32 + v * c32]
+        };
         let lum =
             0.2126 * band.rgb[0] as f64 + 0.7152 * band.rgb[1] as f64 + 0.0722 * band.rgb[2] as f64;
         for j in 0..n - 1 {
@@ -266,7 +273,7 @@ pub fn render_ghost(
                     // aperture, by half a feather, at every corner — so everywhere inside.
                     let open = convex
                         && tri.iter().all(|&k| {
-                            let [u, v] = g.stop_uv[k];
+                            let [u, v] = stop_uv(k);
                             g.max_rel[k] <= 1.0 - 0.5 * feather
                                 && aperture.signed_distance(u, v) <= -0.5 * feather
                         });
@@ -281,7 +288,7 @@ pub fn render_ghost(
                         let base = scratch.positions.len() as u32;
                         for (q, &k) in p.iter().zip(&tri) {
                             scratch.positions.push(frame.to_pixel(q[0], q[1]));
-                            let [u, v] = g.stop_uv[k];
+                            let [u, v] = stop_uv(k);
                             scratch.attrs.push([irr, g.weight[k], u, v, g.max_rel[k]]);
                         }
                         scratch.triangles.push([base, base + 1, base + 2]);
