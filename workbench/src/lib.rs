@@ -6,5 +6,6 @@ pub mod aperture_file;
 pub mod cli;
 pub mod lens_library;
 pub mod output;
+pub mod plugin_dirs;
 pub mod report;
 pub mod table;

@@ -2,6 +2,7 @@
 
 mod convert;
 mod info;
+mod plugins;
 mod precompute;
 mod render;
 mod trace;
@@ -33,6 +34,8 @@ pub enum Command {
     Trace(trace::TraceArgs),
     /// Read a lens file (.xml, Zemax .zmx, PBRT .dat) and write it as flarebench XML.
     Convert(convert::ConvertArgs),
+    /// Flare algorithm plugins: `plugins list`.
+    Plugins(plugins::PluginsArgs),
 }
 
 /// Runs the command line; errors are printed with their causes.
@@ -44,6 +47,7 @@ pub fn main() -> ExitCode {
         Command::Render(a) => render::run(a, cli.quiet),
         Command::Precompute(a) => precompute::run(a, cli.quiet),
         Command::Convert(a) => convert::run(a, cli.quiet),
+        Command::Plugins(a) => plugins::run(a, cli.quiet),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
