@@ -4,6 +4,7 @@
 
 pub mod aperture_file;
 pub mod cli;
+pub mod label;
 pub mod lens_library;
 pub mod output;
 pub mod plugin_dirs;

@@ -1,5 +1,6 @@
 //! Command-line interface: argument parsing and dispatch.
 
+mod compare;
 mod convert;
 mod info;
 mod plugins;
@@ -34,6 +35,9 @@ pub enum Command {
     Trace(trace::TraceArgs),
     /// Read a lens file (.xml, Zemax .zmx, PBRT .dat) and write it as flarebench XML.
     Convert(convert::ConvertArgs),
+    /// Render one scene with several algorithm plugins: side-by-side and difference images,
+    /// median time, error against the reference, items drawn, peak memory.
+    Compare(compare::CompareArgs),
     /// Flare algorithm plugins: `plugins list`.
     Plugins(plugins::PluginsArgs),
 }
@@ -48,6 +52,7 @@ pub fn main() -> ExitCode {
         Command::Precompute(a) => precompute::run(a, cli.quiet),
         Command::Convert(a) => convert::run(a, cli.quiet),
         Command::Plugins(a) => plugins::run(a, cli.quiet),
+        Command::Compare(a) => compare::run(a, cli.quiet),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
