@@ -344,8 +344,14 @@ fn misfit_no_entry(dir: &Path) -> PathBuf {
 fn the_guide_shows_the_example_crate_verbatim() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     let guide = std::fs::read_to_string(root.join("docs/plugins.md")).unwrap();
-    for file in ["algorithms/example-glow/src/lib.rs", "algorithms/example-glow/Cargo.toml"] {
+    for file in [
+        "algorithms/example-glow/src/lib.rs",
+        "algorithms/example-glow/Cargo.toml",
+    ] {
         let text = std::fs::read_to_string(root.join(file)).unwrap();
-        assert!(guide.contains(&text), "docs/plugins.md no longer shows {file} as it is");
+        assert!(
+            guide.contains(&text),
+            "docs/plugins.md no longer shows {file} as it is"
+        );
     }
 }

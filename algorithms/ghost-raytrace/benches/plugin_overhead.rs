@@ -1,0 +1,83 @@
+//! The plugin boundary's cost: one render of the Heliar (light at 8°, 640×360, quality fast)
+//! called directly (`plan::plan` + `ghosts::render`, as `flarebench render` does) against the
+//! same render through the loaded plugin library (`host::load` → `PluginInstance::render`:
+//! scene conversion, the host's image, the thunk's checks, the copy into the host's buffer and
+//! the NaN scan). Needs the release library first:
+//!
+//! ```sh
+//! cargo build --release -p flarebench-ghost-raytrace
+//! cargo bench -p flarebench-ghost-raytrace --bench plugin_overhead
+//! ```
+
+use std::path::Path;
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use flarebench_sdk::abi::author::{Scene, SceneLight};
+use flarebench_sdk::abi::host;
+use flarebench_sdk::abi::params::parse_values;
+use flarebench_sdk::aperture::Aperture;
+use flarebench_sdk::ghost::render::Frame;
+use flarebench_sdk::io::read_lens;
+use ghost_raytrace::ghosts;
+use ghost_raytrace::plan::{self, PlanOptions};
+use ghost_raytrace::scene::{LightSpec, Quality};
+
+fn bench(c: &mut Criterion) {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../lenses/heliar-tronnier.xml"
+    );
+    let sys = read_lens(Path::new(path)).unwrap().system;
+    let (w, h) = (640, 360);
+    let frame = Frame {
+        width: w,
+        height: h,
+        film_width_mm: sys.film_width_mm,
+        film_height_mm: sys.film_width_mm * h as f64 / w as f64,
+    };
+    let light = LightSpec::parse("8,30").unwrap();
+    let aperture = Aperture::Circular;
+
+    let exe = std::env::current_exe().unwrap();
+    let dir = exe.parent().and_then(Path::parent).unwrap();
+    let lib = dir.join(format!(
+        "{}ghost_raytrace{}",
+        std::env::consts::DLL_PREFIX,
+        std::env::consts::DLL_SUFFIX
+    ));
+    let plugin = host::load(&lib).unwrap_or_else(|e| {
+        panic!("{e}\n(run `cargo build --release -p flarebench-ghost-raytrace` first)")
+    });
+    let mut inst = plugin.instantiate().unwrap();
+    inst.prepare(&sys).unwrap();
+    let values = parse_values(&plugin.params, "quality=fast").unwrap();
+    let scene = Scene {
+        lights: vec![SceneLight {
+            theta_deg: light.theta_deg,
+            phi_deg: light.phi_deg,
+            intensity: light.intensity,
+            spectrum: light.spectrum,
+        }],
+        frame,
+        aperture: aperture.clone(),
+    };
+
+    let mut g = c.benchmark_group("heliar_8deg_640x360_fast");
+    g.sample_size(20);
+    g.bench_function("direct", |b| {
+        b.iter(|| {
+            let opts = PlanOptions::for_quality(Quality::Fast, None);
+            let plans = plan::plan(&sys, std::slice::from_ref(&light), &frame, &opts).unwrap();
+            let (img, _) = ghosts::render(&sys, &aperture, frame, &plans).unwrap();
+            assert!(!img.has_non_finite());
+            img
+        })
+    });
+    g.bench_function("plugin", |b| {
+        b.iter(|| inst.render(&scene, &values).unwrap())
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);
