@@ -16,8 +16,8 @@
 //! gains outside exactly what it loses inside. Corners and curvature do not cancel: for a
 //! convex opening the integral of `T` is the open area plus `(2π + 2Σ tan(θᵢ/2))·feather²/80`
 //! (θᵢ the exterior angles of its corners; `π·feather²/20` for the circle) — relative 1e-5 at
-//! a feather of 1/64. The ghost renderer feathers at its grid resolution so meshes do not
-//! alias.
+//! a feather of 1/64. The ghost renderer feathers over about one output pixel
+//! (`ghost::render::feather_width`).
 //!
 //! **Dust and scratches** (issue #4) are not part of the opening. A caller with such an
 //! overlay multiplies the opening's transmission by the overlay's
@@ -190,6 +190,13 @@ enum Shape<'a> {
 }
 
 impl ApertureSampler<'_> {
+    /// True when the opening is convex (the circle and the iris; a mask may not be): then a
+    /// triangle whose corners lie inside, at least `feather/2` from the edge, lies wholly in
+    /// the fully open part, as does every point interpolated between its corners.
+    pub fn is_convex(&self) -> bool {
+        !matches!(self.shape, Shape::Mask(_))
+    }
+
     /// See [`Aperture::transmission`].
     pub fn transmission(&self, u: f32, v: f32) -> f32 {
         match self.shape {

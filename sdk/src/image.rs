@@ -4,7 +4,11 @@
 //! Pixel `(x, y)` covers `[x, x + 1) × [y, y + 1)` in pixel coordinates, x to the right and y
 //! down, and is stored at `pixels[y * width + x]`.
 
+mod upsample;
+
 use serde::Serialize;
+
+pub use upsample::{CoarseGrid, add_upsampled};
 
 use crate::color::srgb::LUMINANCE_WEIGHTS;
 

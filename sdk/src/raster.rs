@@ -275,6 +275,13 @@ impl<const N: usize> Setup<N> {
         }
     }
 
+    /// Change of the attributes from one pixel to the next along x.
+    #[inline]
+    fn x_step(&self) -> [f32; N] {
+        let (d1, d2) = (self.bary[0][0] as f32, self.bary[1][0] as f32);
+        std::array::from_fn(|k| d1 * self.d1[k] + d2 * self.d2[k])
+    }
+
     /// Attributes at `p` (tile coordinates): barycentric weights clamped to the triangle, so
     /// that rounding can never extrapolate beyond the vertices' values.
     #[inline]
@@ -385,33 +392,45 @@ fn rasterize_in_tile<const N: usize, F>(
         let row = &mut view.rows[j];
         for (k, m) in moments.iter().enumerate() {
             let i = i0 + k;
-            let (area, centroid) = if i >= full0 && i < full1 {
-                (1.0, [i as f64 + 0.5, y0 + 0.5])
-            } else {
-                // −∮ y dx is the area for one winding and minus it for the other.
-                let area = tri.winding * m[0];
-                #[allow(
-                    clippy::neg_cmp_op_on_partial_ord,
-                    reason = "`!(area > 0)` also skips NaN"
-                )]
-                if !(area > 0.0) {
-                    continue;
-                }
-                // First moments / area, both with the same sign: the centroid, in the pixel.
-                (
-                    area,
-                    [
-                        i as f64 + (m[1] / m[0]).clamp(0.0, 1.0),
-                        y0 + (m[2] / m[0]).clamp(0.0, 1.0),
-                    ],
-                )
-            };
+            if i >= full0 && i < full1 {
+                continue; // the full run, below
+            }
+            // −∮ y dx is the area for one winding and minus it for the other.
+            let area = tri.winding * m[0];
+            #[allow(
+                clippy::neg_cmp_op_on_partial_ord,
+                reason = "`!(area > 0)` also skips NaN"
+            )]
+            if !(area > 0.0) {
+                continue;
+            }
+            // First moments / area, both with the same sign: the centroid, in the pixel.
+            let centroid = [
+                i as f64 + (m[1] / m[0]).clamp(0.0, 1.0),
+                y0 + (m[2] / m[0]).clamp(0.0, 1.0),
+            ];
             let value = shade(&tri.interpolate(centroid));
             let area = area as f32;
             let px = &mut row[i];
             px[0] += area * value[0];
             px[1] += area * value[1];
             px[2] += area * value[2];
+        }
+        if full0 < full1 {
+            // Pixels wholly inside: area 1 at the centre. The attributes are affine in x, so
+            // they step by a constant from one centre to the next (the centres are inside the
+            // triangle, where no clamping applies).
+            let mut a = tri.interpolate([full0 as f64 + 0.5, y0 + 0.5]);
+            let step = tri.x_step();
+            for px in &mut row[full0..full1] {
+                let value = shade(&a);
+                px[0] += value[0];
+                px[1] += value[1];
+                px[2] += value[2];
+                for (v, d) in a.iter_mut().zip(&step) {
+                    *v += d;
+                }
+            }
         }
     }
 }

@@ -30,7 +30,11 @@ pub struct ErrorReport {
 pub struct GhostLine {
     pub ghost: String,
     pub grid: usize,
+    /// Coarse-frame factor the ghost was drawn at (1: full resolution).
+    pub downscale: usize,
     pub spectral: bool,
+    /// Wavelengths the ghost was traced at.
+    pub bands: usize,
     pub energy_share: f64,
     pub rays: usize,
     pub triangles: usize,
@@ -89,7 +93,9 @@ impl LightReport {
             .map(|(g, s)| GhostLine {
                 ghost: g.path.to_string(),
                 grid: g.grid,
-                spectral: g.spectral,
+                downscale: g.downscale,
+                spectral: g.spectral(),
+                bands: g.bands.len(),
                 energy_share: g.energy_share,
                 rays: s.rays,
                 triangles: s.triangles,
@@ -154,11 +160,13 @@ impl RenderReport {
             );
             for g in l.ghosts.iter().take(5) {
                 s += &format!(
-                    "  ghost {:>6}: energy {:.3e}, grid {}², {}\n",
+                    "  ghost {:>6}: energy {:.3e}, grid {}², {} band{}, drawn at 1/{}\n",
                     g.ghost,
                     g.energy_share,
                     g.grid,
-                    if g.spectral { "spectral" } else { "one band" }
+                    g.bands,
+                    if g.bands == 1 { "" } else { "s" },
+                    g.downscale
                 );
             }
         }

@@ -104,8 +104,21 @@ impl GhostColours {
     /// The colour of the whole spectrum traced once at a wavelength whose factors are those of
     /// band `k`.
     pub fn merged_colour(&self, path: GhostPath, k: usize) -> [f32; 3] {
+        self.group_colour(path, 0..self.band_factors.len(), k)
+    }
+
+    /// The colour of bands `group` (a range of band indices) traced once at band `k`: Σ over
+    /// the group's fine steps of their weight × throughput relative to band `k`'s.
+    pub fn group_colour(
+        &self,
+        path: GhostPath,
+        group: std::ops::Range<usize>,
+        k: usize,
+    ) -> [f32; 3] {
         let t_band = path_throughput(path, &self.band_factors[k], self.sensor);
-        self.sum(path, t_band, |_| true)
+        let (lo, hi) = (self.edges[group.start], self.edges[group.end]);
+        let last = group.end == self.band_factors.len();
+        self.sum(path, t_band, |l| l >= lo && (l < hi || last))
     }
 
     fn sum(&self, path: GhostPath, t_band: f64, keep: impl Fn(f64) -> bool) -> [f32; 3] {

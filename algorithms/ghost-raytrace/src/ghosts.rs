@@ -1,12 +1,19 @@
 //! Carrying out a plan: every planned ghost of every light rendered into one linear HDR
 //! image, ghosts spread over the cores.
+//!
+//! Ghosts are grouped by their coarse-frame factor ([`GhostJob::downscale`]): each group is
+//! drawn into a coarse copy of the frame (full resolution for factor 1) and added to the
+//! output by bilinear upsampling (`flarebench_sdk::image::add_upsampled`). Within a group,
+//! ghosts are spread over the cores, each chunk of ghosts drawing into its own accumulator.
+//!
+//! [`GhostJob::downscale`]: crate::plan::GhostJob::downscale
 
 use flarebench_sdk::LensSystem;
 use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::ghost::render::{
     BandRef, Frame, GhostContext, GhostLight, GhostScratch, GhostStats, render_ghost,
 };
-use flarebench_sdk::image::HdrImage;
+use flarebench_sdk::image::{CoarseGrid, HdrImage, add_upsampled};
 use flarebench_sdk::paraxial::{analyse, stop_opening};
 use flarebench_sdk::spectrum::LAMBDA_D_NM;
 use rayon::prelude::*;
@@ -23,21 +30,54 @@ pub fn render(
     plans: &[LightPlan],
 ) -> Result<(HdrImage, Vec<Vec<GhostStats>>), GhostRenderError> {
     let p = analyse(system, LAMBDA_D_NM)?;
-    let ctx = GhostContext {
-        system,
-        aperture,
-        frame,
-        stop_radius: stop_opening(system),
-        f_number: p.f_number,
-    };
-    let jobs: Vec<(usize, usize)> = plans
+    let mut jobs: Vec<(usize, usize, usize)> = plans
         .iter()
         .enumerate()
-        .flat_map(|(l, lp)| (0..lp.ghosts.len()).map(move |g| (l, g)))
+        .flat_map(|(l, lp)| {
+            lp.ghosts
+                .iter()
+                .enumerate()
+                .map(move |(g, job)| (job.downscale.max(1), l, g))
+        })
         .collect();
-    // One accumulator image per chunk of jobs: few chunks, so few full-size images.
-    let chunk = (jobs.len() / (2 * rayon::current_num_threads())).max(1);
-    let (img, mut stats) = jobs
+    jobs.sort_unstable();
+    let mut img = HdrImage::new(frame.width, frame.height);
+    let mut stats = Vec::with_capacity(jobs.len());
+    for group in jobs.chunk_by(|a, b| a.0 == b.0) {
+        let grid = CoarseGrid::for_frame(frame.width, frame.height, group[0].0);
+        let ctx = GhostContext {
+            system,
+            aperture,
+            frame: frame.coarse(&grid),
+            stop_radius: stop_opening(system),
+            f_number: p.f_number,
+        };
+        let coarse = render_group(&ctx, plans, group, &mut stats);
+        add_upsampled(&mut img, &coarse, &grid);
+    }
+    stats.sort_by_key(|&(l, g, _)| (l, g));
+    let mut per_light: Vec<Vec<GhostStats>> = plans
+        .iter()
+        .map(|lp| vec![GhostStats::default(); lp.ghosts.len()])
+        .collect();
+    for (l, g, s) in stats {
+        per_light[l][g] = s;
+    }
+    Ok((img, per_light))
+}
+
+/// Draws the ghosts `group` (`(factor, light, ghost)`) into one image of `ctx.frame`'s size,
+/// appending each ghost's statistics to `stats`.
+fn render_group(
+    ctx: &GhostContext<'_>,
+    plans: &[LightPlan],
+    group: &[(usize, usize, usize)],
+    stats: &mut Vec<(usize, usize, GhostStats)>,
+) -> HdrImage {
+    let frame = ctx.frame;
+    // One accumulator image per chunk of jobs: few chunks, so few images.
+    let chunk = (group.len() / (2 * rayon::current_num_threads())).max(1);
+    let (img, group_stats) = group
         .par_iter()
         .with_min_len(chunk)
         .fold(
@@ -48,7 +88,7 @@ pub fn render(
                     GhostScratch::default(),
                 )
             },
-            |(mut img, mut stats, mut scratch), &(l, g)| {
+            |(mut img, mut stats, mut scratch), &(_, l, g)| {
                 let lp = &plans[l];
                 let job = &lp.ghosts[g];
                 let light = GhostLight {
@@ -56,22 +96,16 @@ pub fn render(
                     phi: lp.light.phi_deg.to_radians(),
                     irradiance: 1.0,
                 };
-                // A spectral ghost traces every band; another traces the merged band in its
-                // own colour.
-                let bands: Vec<BandRef<'_>> = if job.spectral {
-                    lp.bands
-                        .iter()
-                        .zip(&job.band_rgb)
-                        .map(|(b, &rgb)| BandRef { rgb, ..b.as_ref() })
-                        .collect()
-                } else {
-                    vec![BandRef {
-                        rgb: job.band_rgb[0],
-                        ..lp.merged.as_ref()
-                    }]
-                };
+                let bands: Vec<BandRef<'_>> = job
+                    .bands
+                    .iter()
+                    .map(|b| BandRef {
+                        rgb: b.rgb,
+                        ..lp.bands[b.band].as_ref()
+                    })
+                    .collect();
                 let s = render_ghost(
-                    &ctx,
+                    ctx,
                     job.path,
                     &job.bounds,
                     job.grid,
@@ -94,13 +128,6 @@ pub fn render(
                 (a, sa)
             },
         );
-    stats.sort_by_key(|&(l, g, _)| (l, g));
-    let mut per_light: Vec<Vec<GhostStats>> = plans
-        .iter()
-        .map(|lp| vec![GhostStats::default(); lp.ghosts.len()])
-        .collect();
-    for (l, g, s) in stats {
-        per_light[l][g] = s;
-    }
-    Ok((img, per_light))
+    stats.extend(group_stats);
+    img
 }

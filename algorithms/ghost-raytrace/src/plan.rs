@@ -29,9 +29,6 @@ pub struct LightPlan {
     pub light: LightSpec,
     /// Every band of the light's spectral sampling.
     pub bands: Vec<Band>,
-    /// All bands merged into one (middle wavelength, summed colour), for ghosts whose
-    /// dispersion does not show.
-    pub merged: Band,
     pub ghosts: Vec<GhostJob>,
     pub dropped: Vec<DroppedGhost>,
 }
@@ -44,12 +41,42 @@ pub struct GhostJob {
     pub bounds: GhostBounds,
     /// Grid vertices per side.
     pub grid: usize,
-    /// True when traced at every band, false when at the merged band only.
-    pub spectral: bool,
-    /// The ghost's colour at each band (spectral), or at the merged band alone: see
-    /// [`super::colour`].
-    pub band_rgb: Vec<[f32; 3]>,
+    /// The ghost is drawn into a coarse copy of the frame with this many pixels a side per
+    /// coarse pixel (a power of two; 1 = full resolution): see [`coarse_factor`].
+    pub downscale: usize,
+    /// The wavelengths the ghost is traced at: groups of neighbouring bands, each traced once
+    /// at its middle band in the group's summed colour ([`band_groups`]).
+    pub bands: Vec<GhostBand>,
     pub energy_share: f64,
+}
+
+/// One traced wavelength of a ghost.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct GhostBand {
+    /// Index into [`LightPlan::bands`] of the band traced (its wavelength and tables).
+    pub band: usize,
+    /// The colour it adds: the ghost's colour over the bands it stands for
+    /// ([`GhostColours::group_colour`]).
+    pub rgb: [f32; 3],
+}
+
+impl GhostJob {
+    /// True when traced at more than one wavelength.
+    pub fn spectral(&self) -> bool {
+        self.bands.len() > 1
+    }
+}
+
+/// Splits `k` bands into `m` (1 ≤ m ≤ k) contiguous groups of as equal size as can be; each
+/// group with the band it is traced at (its middle).
+pub fn band_groups(k: usize, m: usize) -> Vec<(std::ops::Range<usize>, usize)> {
+    let m = m.clamp(1, k.max(1));
+    (0..m)
+        .map(|g| {
+            let (a, b) = (g * k / m, (g + 1) * k / m);
+            (a..b, (a + b) / 2)
+        })
+        .collect()
 }
 
 /// Why a ghost was left out.
@@ -94,6 +121,9 @@ pub struct PlanOptions<'a> {
     pub precomputed: Option<&'a BoundsTable>,
     /// Trace every band of every ghost, however small its dispersion (the reference).
     pub all_bands: bool,
+    /// Largest coarse-frame factor a ghost may be drawn at (1: every ghost at full
+    /// resolution, as the reference does).
+    pub max_downscale: usize,
 }
 
 impl<'a> PlanOptions<'a> {
@@ -106,6 +136,7 @@ impl<'a> PlanOptions<'a> {
             grid_scale: quality.grid_scale(),
             precomputed,
             all_bands: false,
+            max_downscale: MAX_DOWNSCALE,
         }
     }
 }
@@ -124,6 +155,7 @@ pub fn plan(
         grid_scale,
         precomputed,
         all_bands,
+        max_downscale,
     } = *opts;
     let paths = enumerate_ghosts(system);
     let tables = InterfaceTableSet::for_system(system, BOUNDS_LAMBDA_NM);
@@ -137,11 +169,6 @@ pub fn plan(
                 .zip(sampling.weights())
                 .map(|(&l, &rgb)| Band::new(system, l, rgb.map(|c| c * light.intensity as f32)))
                 .collect();
-            let mid = sampling.wavelengths_nm()[bands / 2];
-            let sum = band_list.iter().fold([0f32; 3], |a, b| {
-                [a[0] + b.rgb[0], a[1] + b.rgb[1], a[2] + b.rgb[2]]
-            });
-            let merged = Band::new(system, mid, sum);
             let colours = GhostColours::new(
                 system,
                 light.spectrum,
@@ -213,33 +240,76 @@ pub fn plan(
                     dropped.push(drop(DropReason::OffFrame));
                     continue;
                 }
-                let spectral = bands > 1
-                    && (all_bands || dispersion_px(system, path, theta, lo, hi, frame) >= 0.5);
-                let band_rgb = if spectral {
-                    colours.band_colours(path)
-                } else {
-                    vec![colours.merged_colour(path, bands / 2)]
-                };
                 let cap = (MAX_GRID as f64 * grid_scale.max(1.0)).ceil() as usize;
                 let grid = ((b.grid as f64 * grid_scale).round() as usize).clamp(MIN_GRID / 2, cap);
+                let downscale = coarse_factor(
+                    &b.sensor,
+                    grid,
+                    frame,
+                    max_downscale,
+                    quality.coarse_pixels_per_radius(),
+                );
+                // Enough bands that neighbouring ones move the ghost by at most half a drawn
+                // pixel: m bands over a dispersion of D drawn pixels step D/(m − 1).
+                let groups = if all_bands {
+                    bands
+                } else {
+                    let d = dispersion_px(system, path, theta, lo, hi, frame) / downscale as f64;
+                    if d.is_finite() {
+                        ((2.0 * d).ceil() as usize + 1).min(bands)
+                    } else {
+                        bands
+                    }
+                };
+                let ghost_bands = band_groups(bands, groups)
+                    .into_iter()
+                    .map(|(group, band)| GhostBand {
+                        band,
+                        rgb: colours.group_colour(path, group, band),
+                    })
+                    .collect();
                 ghosts.push(GhostJob {
                     path,
                     bounds: b,
                     grid,
-                    spectral,
-                    band_rgb,
+                    downscale,
+                    bands: ghost_bands,
                     energy_share: b.energy_share,
                 });
             }
             Ok(LightPlan {
                 light: light.clone(),
                 bands: band_list,
-                merged,
                 ghosts,
                 dropped,
             })
         })
         .collect()
+}
+
+/// Largest coarse-frame factor of the presets.
+pub const MAX_DOWNSCALE: usize = 16;
+
+/// Coarse pixels a grid cell must span at least: the ghost's irradiance is interpolated
+/// linearly across each triangle, so a coarse pixel of a quarter cell resolves it.
+pub const COARSE_PIXELS_PER_CELL: f64 = 4.0;
+
+/// The coarse-frame factor for a ghost landing on `sensor` (mm) with an `n × n` grid: the
+/// largest power of two, at most `max`, whose coarse pixel is no larger than a
+/// [`COARSE_PIXELS_PER_CELL`]th of a grid cell on the sensor nor than a `per_radius`th of the
+/// ghost's radius. The ghost's edge is one drawn pixel wide
+/// (`flarebench_sdk::ghost::render::EDGE_PIXELS`), so a coarser frame blurs it over `factor`
+/// output pixels, which touches about `factor / radius` of the ghost's area
+/// ([`Quality::coarse_pixels_per_radius`]).
+pub fn coarse_factor(sensor: &Rect, n: usize, frame: &Frame, max: usize, per_radius: f64) -> usize {
+    let extent_px = (sensor.x1 - sensor.x0).max(sensor.y1 - sensor.y0) / frame.pixel_mm();
+    let cell_px = extent_px / (n.max(2) - 1) as f64;
+    let limit = (cell_px / COARSE_PIXELS_PER_CELL).min(0.5 * extent_px / per_radius);
+    let mut f = 1;
+    while 2 * f <= max && (2 * f) as f64 <= limit {
+        f *= 2;
+    }
+    f
 }
 
 /// True when a sensor rectangle (mm) overlaps the frame.
@@ -271,4 +341,39 @@ fn dispersion_px(
         (a.sensor.y1 - b.sensor.y1).abs(),
     ];
     d.iter().cloned().fold(0.0, f64::max) / frame.pixel_mm()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn frame() -> Frame {
+        // 1920 px over 36 mm: a pixel is 0.01875 mm.
+        Frame {
+            width: 1920,
+            height: 1080,
+            film_width_mm: 36.0,
+            film_height_mm: 20.25,
+        }
+    }
+
+    fn square(px: f64) -> Rect {
+        let h = 0.5 * px * 36.0 / 1920.0;
+        Rect::square(0.0, 0.0, h)
+    }
+
+    #[test]
+    fn coarse_factor_follows_cells_and_radius() {
+        let f = frame();
+        // 1000 px wide, 17² grid: cells of 62.5 px allow 15.6, the radius (500 px) over 128
+        // allows 3.9: factor 2.
+        assert_eq!(coarse_factor(&square(1000.0), 17, &f, 16, 128.0), 2);
+        // Over 32: 15.6 either way → 8.
+        assert_eq!(coarse_factor(&square(1000.0), 17, &f, 16, 32.0), 8);
+        // Capped by `max`, and 1 for small ghosts or fine grids.
+        assert_eq!(coarse_factor(&square(1000.0), 17, &f, 4, 32.0), 4);
+        assert_eq!(coarse_factor(&square(40.0), 17, &f, 16, 4.0), 1);
+        assert_eq!(coarse_factor(&square(1000.0), 17, &f, 1, 4.0), 1);
+        assert_eq!(coarse_factor(&square(0.0), 17, &f, 16, 4.0), 1);
+    }
 }

@@ -60,6 +60,7 @@ pub fn reference_plans(
         grid_scale: REFERENCE_GRID_SCALE * density,
         precomputed: None,
         all_bands: true,
+        max_downscale: 1,
     };
     let mut plans = plan::plan(system, lights, frame, &opts)?;
     let min_grid = (REFERENCE_MIN_GRID as f64 * density).round() as usize;

@@ -121,6 +121,18 @@ impl Quality {
         }
     }
 
+    /// Coarse pixels a ghost's radius must span when it is drawn into a coarse frame
+    /// (`plan::coarse_factor`): the edge blur this allows touches about 1/this of the ghost's
+    /// area. Measured on the Heliar (480×270, 10°): 64 gives 2.0% relative RMSE against the
+    /// reference, 128 gives 1.2%, full resolution 0.84%.
+    pub fn coarse_pixels_per_radius(self) -> f64 {
+        match self {
+            Quality::Fast => 32.0,
+            Quality::Default => 128.0,
+            Quality::High => 512.0,
+        }
+    }
+
     /// Ghosts whose energy share (of the direct image) is below this are left out.
     pub fn energy_threshold(self) -> f64 {
         match self {

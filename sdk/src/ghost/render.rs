@@ -17,7 +17,7 @@
 //! point at sensor (x, y) mm lands at pixel ((0.5 − x/W)·w, (0.5 + y/H)·h), pixel rows downward.
 
 use crate::aperture::Aperture;
-use crate::image::HdrImage;
+use crate::image::{CoarseGrid, HdrImage};
 use crate::raster::rasterize;
 use crate::system::LensSystem;
 use crate::trace::{InterfaceTableSet, Sequence};
@@ -47,6 +47,19 @@ impl Frame {
     /// Area of one pixel on the sensor (mm²).
     pub fn pixel_area_mm2(&self) -> f64 {
         (self.film_width_mm / self.width as f64) * (self.film_height_mm / self.height as f64)
+    }
+
+    /// The frame of the coarse grid `grid` (from [`CoarseGrid::for_frame`] on this frame's
+    /// size): same centre and pixel aspect, `grid.factor` times larger pixels, extended to
+    /// whole coarse pixels.
+    pub fn coarse(&self, grid: &CoarseGrid) -> Frame {
+        let f = grid.factor as f64;
+        Frame {
+            width: grid.width,
+            height: grid.height,
+            film_width_mm: self.film_width_mm * (grid.width as f64 * f) / self.width as f64,
+            film_height_mm: self.film_height_mm * (grid.height as f64 * f) / self.height as f64,
+        }
     }
 
     /// Size of one pixel on the sensor (mm), the larger of its two sides.
@@ -123,6 +136,10 @@ pub struct GhostScratch {
     positions: Vec<[f32; 2]>,
     attrs: Vec<[f32; 5]>,
     triangles: Vec<[u32; 3]>,
+    /// Triangles wholly inside the open aperture and the clip radius: irradiance × weight.
+    inner_positions: Vec<[f32; 2]>,
+    inner_attrs: Vec<[f32; 1]>,
+    inner_triangles: Vec<[u32; 3]>,
 }
 
 /// Everything fixed for a frame: lens data the renderer needs per ghost.
@@ -154,7 +171,9 @@ pub fn render_ghost(
     let cos_t = light.theta.cos();
     let frame = ctx.frame;
     let px_area = frame.pixel_area_mm2();
-    let feather = 2.0 / (n.max(2) - 1) as f32;
+    let feather = feather_width(bounds, n, &frame);
+    let aperture = ctx.aperture.sampler();
+    let convex = aperture.is_convex();
     for band in bands {
         let Ok(seq) = Sequence::ghost(ctx.system, band.lambda_nm, path.first, path.second) else {
             return stats;
@@ -182,6 +201,9 @@ pub fn render_ghost(
         scratch.positions.clear();
         scratch.attrs.clear();
         scratch.triangles.clear();
+        scratch.inner_positions.clear();
+        scratch.inner_attrs.clear();
+        scratch.inner_triangles.clear();
         let rot = |k: usize| {
             let [x, y] = g.sensor[k].map(f64::from);
             [x * cphi - y * sphi, x * sphi + y * cphi]
@@ -228,21 +250,44 @@ pub fn render_ghost(
                         2.0 * r * r
                     };
                     let irr = (half_cell / area * light.irradiance * px_area) as f32;
-                    let base = scratch.positions.len() as u32;
-                    for (q, &k) in p.iter().zip(&tri) {
-                        scratch.positions.push(frame.to_pixel(q[0], q[1]));
-                        let [u, v] = g.stop_uv[k];
-                        scratch.attrs.push([irr, g.weight[k], u, v, g.max_rel[k]]);
+                    // Wholly open: inside the clip radius and (for a convex opening) the
+                    // aperture, by half a feather, at every corner — so everywhere inside.
+                    let open = convex
+                        && tri.iter().all(|&k| {
+                            let [u, v] = g.stop_uv[k];
+                            g.max_rel[k] <= 1.0 - 0.5 * feather
+                                && aperture.signed_distance(u, v) <= -0.5 * feather
+                        });
+                    if open {
+                        let base = scratch.inner_positions.len() as u32;
+                        for (q, &k) in p.iter().zip(&tri) {
+                            scratch.inner_positions.push(frame.to_pixel(q[0], q[1]));
+                            scratch.inner_attrs.push([irr * g.weight[k]]);
+                        }
+                        scratch.inner_triangles.push([base, base + 1, base + 2]);
+                    } else {
+                        let base = scratch.positions.len() as u32;
+                        for (q, &k) in p.iter().zip(&tri) {
+                            scratch.positions.push(frame.to_pixel(q[0], q[1]));
+                            let [u, v] = g.stop_uv[k];
+                            scratch.attrs.push([irr, g.weight[k], u, v, g.max_rel[k]]);
+                        }
+                        scratch.triangles.push([base, base + 1, base + 2]);
                     }
-                    scratch.triangles.push([base, base + 1, base + 2]);
                     let w_mean = tri.iter().map(|&k| g.weight[k] as f64).sum::<f64>() / 3.0;
                     stats.flux += half_cell * light.irradiance * w_mean * lum;
                 }
             }
         }
-        stats.triangles += scratch.triangles.len();
-        let aperture = ctx.aperture.sampler();
+        stats.triangles += scratch.triangles.len() + scratch.inner_triangles.len();
         let rgb = band.rgb;
+        rasterize(
+            img,
+            &scratch.inner_positions,
+            &scratch.inner_attrs,
+            &scratch.inner_triangles,
+            |a: &[f32; 1]| [rgb[0] * a[0], rgb[1] * a[0], rgb[2] * a[0]],
+        );
         rasterize(
             img,
             &scratch.positions,
@@ -257,6 +302,26 @@ pub fn render_ghost(
     }
     stats
 }
+
+/// Width of the ghost's edge (the clip at relative radius 1 and the aperture's outline), in
+/// units of the relative radius at the stop: [`EDGE_PIXELS`] pixels of `frame` on the ghost's
+/// image (whose radius on the sensor, relative radius 1, is half its sensor extent), but never
+/// wider than two grid cells (`2/(n − 1)`, where the interpolated radius stops resolving the
+/// edge) nor narrower than 1e-4.
+pub fn feather_width(bounds: &GhostBounds, n: usize, frame: &Frame) -> f32 {
+    let s = &bounds.sensor;
+    let radius_px = 0.5 * (s.x1 - s.x0).max(s.y1 - s.y0) / frame.pixel_mm();
+    let cells = 2.0 / (n.max(2) - 1) as f64;
+    let f = if radius_px > 0.0 {
+        (EDGE_PIXELS / radius_px).min(cells)
+    } else {
+        cells
+    };
+    f.max(1e-4) as f32
+}
+
+/// Width of a ghost's edge on the image, in pixels of the frame it is drawn into.
+pub const EDGE_PIXELS: f64 = 1.0;
 
 /// 0 at `edge0`, 1 at `edge1`, smooth (C¹) in between; works for either order of the edges.
 fn smoothstep(edge0: f32, edge1: f32, x: f32) -> f32 {

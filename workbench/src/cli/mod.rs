@@ -1,5 +1,6 @@
 //! Command-line interface: argument parsing and dispatch.
 
+mod bench;
 mod compare;
 mod convert;
 mod info;
@@ -33,6 +34,8 @@ pub enum Command {
     Render(render::RenderArgs),
     /// Trace one collimated ray through a lens and show every surface it meets.
     Trace(trace::TraceArgs),
+    /// Time ghost rendering per lens and quality preset, with the error against the reference.
+    Bench(bench::BenchArgs),
     /// Read a lens file (.xml, Zemax .zmx, PBRT .dat) and write it as flarebench XML.
     Convert(convert::ConvertArgs),
     /// Render one scene with several algorithm plugins: side-by-side and difference images,
@@ -53,6 +56,7 @@ pub fn main() -> ExitCode {
         Command::Convert(a) => convert::run(a, cli.quiet),
         Command::Plugins(a) => plugins::run(a, cli.quiet),
         Command::Compare(a) => compare::run(a, cli.quiet),
+        Command::Bench(a) => bench::run(a, cli.quiet),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -43,6 +43,10 @@ pub struct RenderArgs {
     /// Blade roundness, 0 (straight) to 1 (a circle).
     #[arg(long, default_value_t = 0.0)]
     pub iris_roundness: f64,
+    /// Largest factor by which a large, smooth ghost may be drawn coarser than the output
+    /// (a power of two; 1 draws every ghost at full resolution). See docs/performance.md.
+    #[arg(long, default_value_t = ghost_raytrace::plan::MAX_DOWNSCALE, value_parser = parse_downscale)]
+    pub max_downscale: usize,
     /// Ghost bounds from `flarebench precompute` (else traced for each light).
     #[arg(long)]
     pub precomputed: Option<PathBuf>,
@@ -67,6 +71,17 @@ pub struct RenderArgs {
     pub json: bool,
 }
 
+/// The output frame: `size` pixels spanning the film's width, the height following the
+/// aspect ratio.
+pub(crate) fn frame_for(sys: &flarebench_sdk::LensSystem, (w, h): (usize, usize)) -> Frame {
+    Frame {
+        width: w,
+        height: h,
+        film_width_mm: sys.film_width_mm,
+        film_height_mm: sys.film_width_mm * h as f64 / w as f64,
+    }
+}
+
 pub(crate) fn parse_size(s: &str) -> Result<(usize, usize), String> {
     let (w, h) = s
         .split_once(['x', 'X'])
@@ -87,6 +102,13 @@ pub(crate) fn parse_size(s: &str) -> Result<(usize, usize), String> {
     Ok((w, h))
 }
 
+pub(crate) fn parse_downscale(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(f) if f.is_power_of_two() && f <= 64 => Ok(f),
+        _ => Err(format!("`{s}` is not a power of two from 1 to 64")),
+    }
+}
+
 fn ms(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
 }
@@ -97,12 +119,7 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
     let sys = &loaded.system;
     let mut timings = Timings::default();
     let (w, h) = args.size;
-    let frame = Frame {
-        width: w,
-        height: h,
-        film_width_mm: sys.film_width_mm,
-        film_height_mm: sys.film_width_mm * h as f64 / w as f64,
-    };
+    let frame = frame_for(sys, args.size);
     let aperture = if args.iris_blades == 0 {
         Aperture::Circular
     } else {
@@ -132,7 +149,10 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
 
     let t = Instant::now();
     let q = args.quality;
-    let opts = PlanOptions::for_quality(q, table.as_ref());
+    let opts = PlanOptions {
+        max_downscale: args.max_downscale,
+        ..PlanOptions::for_quality(q, table.as_ref())
+    };
     let plans = plan::plan(sys, &args.lights, &frame, &opts)?;
     timings.plan_ms = ms(t);
 

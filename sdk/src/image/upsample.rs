@@ -1,0 +1,177 @@
+//! Coarse images of a frame and their bilinear upsampling: large, smooth ghosts are drawn
+//! into a coarse copy of the frame and added back at full resolution.
+//!
+//! A [`CoarseGrid`] with factor `f` covers the full-resolution frame (`w × h` pixels) with
+//! `⌈w/f⌉ × ⌈h/f⌉` coarse pixels, centred on it: coarse pixel `(I, J)` covers full-resolution
+//! `[I·f − ox, (I + 1)·f − ox) × [J·f − oy, (J + 1)·f − oy)` with `ox = (⌈w/f⌉·f − w)/2` (and
+//! likewise `oy`), so the two frames share their centre. A coarse pixel holds the energy of
+//! its `f²` full-resolution pixels; [`add_upsampled`] reconstructs the density by bilinear
+//! interpolation between coarse pixel centres (constant beyond the outermost centres) and
+//! divides by `f²`. A constant image is reproduced exactly; total energy is kept up to the
+//! interpolation's error at the frame border.
+
+use rayon::prelude::*;
+
+use super::HdrImage;
+
+/// A coarse copy of a `width × height` frame (see the module documentation).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CoarseGrid {
+    /// Full-resolution pixels per coarse pixel, along each axis (≥ 1).
+    pub factor: usize,
+    /// Coarse size in pixels.
+    pub width: usize,
+    pub height: usize,
+    /// Full-resolution pixels by which the coarse grid starts before the frame, `[ox, oy]`.
+    pub offset: [f64; 2],
+}
+
+impl CoarseGrid {
+    /// The coarse grid of factor `factor` (at least 1) for a `width × height` frame.
+    pub fn for_frame(width: usize, height: usize, factor: usize) -> CoarseGrid {
+        let f = factor.max(1);
+        let (w, h) = (width.div_ceil(f), height.div_ceil(f));
+        CoarseGrid {
+            factor: f,
+            width: w,
+            height: h,
+            offset: [(w * f - width) as f64 * 0.5, (h * f - height) as f64 * 0.5],
+        }
+    }
+}
+
+/// Per full-resolution pixel along one axis: the coarse index below its centre and the
+/// weight of the next one.
+fn axis_weights(
+    full: usize,
+    coarse: usize,
+    factor: usize,
+    offset: f64,
+) -> Vec<(usize, usize, f32)> {
+    let f = factor as f64;
+    let last = coarse.saturating_sub(1);
+    (0..full)
+        .map(|x| {
+            let u = (x as f64 + 0.5 + offset) / f - 0.5;
+            if u <= 0.0 {
+                (0, 0, 0.0)
+            } else if u >= last as f64 {
+                (last, last, 0.0)
+            } else {
+                let i = u as usize;
+                (i, i + 1, (u - i as f64) as f32)
+            }
+        })
+        .collect()
+}
+
+/// Adds `coarse` (laid out by `grid`) to `dst` at full resolution: bilinear interpolation of
+/// the coarse density, divided by `factor²` so that energy is kept.
+///
+/// # Panics
+/// If `coarse` is not `grid.width × grid.height`.
+pub fn add_upsampled(dst: &mut HdrImage, coarse: &HdrImage, grid: &CoarseGrid) {
+    assert_eq!(
+        (coarse.width, coarse.height),
+        (grid.width, grid.height),
+        "the coarse image has the grid's size"
+    );
+    if dst.width == 0 || dst.height == 0 || grid.width == 0 || grid.height == 0 {
+        return;
+    }
+    if grid.factor == 1 && grid.width == dst.width && grid.height == dst.height {
+        dst.add_image(coarse).expect("sizes checked");
+        return;
+    }
+    let norm = 1.0 / (grid.factor * grid.factor) as f32;
+    let xs = axis_weights(dst.width, grid.width, grid.factor, grid.offset[0]);
+    let ys = axis_weights(dst.height, grid.height, grid.factor, grid.offset[1]);
+    let cw = grid.width;
+    dst.pixels
+        .par_chunks_mut(dst.width)
+        .zip(ys.par_iter())
+        .for_each_init(
+            || vec![[0.0_f32; 3]; cw],
+            |blend, (row, &(j0, j1, ty))| {
+                let (r0, r1) = (
+                    &coarse.pixels[j0 * cw..(j0 + 1) * cw],
+                    &coarse.pixels[j1 * cw..(j1 + 1) * cw],
+                );
+                for ((b, a0), a1) in blend.iter_mut().zip(r0).zip(r1) {
+                    for c in 0..3 {
+                        b[c] = norm * (a0[c] + ty * (a1[c] - a0[c]));
+                    }
+                }
+                for (p, &(i0, i1, tx)) in row.iter_mut().zip(&xs) {
+                    let (a, b) = (blend[i0], blend[i1]);
+                    for c in 0..3 {
+                        p[c] += a[c] + tx * (b[c] - a[c]);
+                    }
+                }
+            },
+        );
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn grids_share_the_frame_centre() {
+        let g = CoarseGrid::for_frame(1920, 1080, 16);
+        assert_eq!((g.width, g.height), (120, 68));
+        assert_eq!(g.offset, [0.0, 4.0]);
+        // Coarse centre (68 / 2 = 34 coarse px) is at 34·16 − 4 = 540 full px.
+        assert_eq!(g.height as f64 * 0.5 * 16.0 - g.offset[1], 540.0);
+        let g = CoarseGrid::for_frame(7, 5, 1);
+        assert_eq!((g.width, g.height, g.offset), (7, 5, [0.0, 0.0]));
+    }
+
+    #[test]
+    fn a_constant_is_reproduced_exactly_and_energy_kept() {
+        let grid = CoarseGrid::for_frame(64, 48, 4);
+        let mut coarse = HdrImage::new(grid.width, grid.height);
+        for p in &mut coarse.pixels {
+            *p = [16.0, 32.0, 48.0];
+        }
+        let mut dst = HdrImage::new(64, 48);
+        add_upsampled(&mut dst, &coarse, &grid);
+        assert!(dst.pixels.iter().all(|p| *p == [1.0, 2.0, 3.0]));
+        assert_eq!(dst.sum()[0], coarse.sum()[0]);
+    }
+
+    #[test]
+    fn a_linear_ramp_is_interpolated_exactly_inside() {
+        // Coarse energy 4·(I + 0.5) per pixel ⇒ density (I + 0.5)/… : linear in x.
+        let grid = CoarseGrid::for_frame(32, 8, 2);
+        let mut coarse = HdrImage::new(grid.width, grid.height);
+        for (k, p) in coarse.pixels.iter_mut().enumerate() {
+            let i = (k % grid.width) as f32;
+            *p = [4.0 * i; 3];
+        }
+        let mut dst = HdrImage::new(32, 8);
+        add_upsampled(&mut dst, &coarse, &grid);
+        // Full pixel x has coarse coordinate u = (x + 0.5)/2 − 0.5: density = u.
+        for x in 1..31 {
+            let u = (x as f32 + 0.5) / 2.0 - 0.5;
+            assert!((dst.get(x, 3).unwrap()[0] - u).abs() < 1e-6, "x {x}");
+        }
+    }
+
+    #[test]
+    fn odd_sizes_and_factor_one() {
+        let grid = CoarseGrid::for_frame(5, 3, 1);
+        let mut coarse = HdrImage::new(5, 3);
+        coarse.pixels[7] = [1.0, 0.0, 0.0];
+        let mut dst = HdrImage::new(5, 3);
+        add_upsampled(&mut dst, &coarse, &grid);
+        assert_eq!(dst, coarse);
+        let grid = CoarseGrid::for_frame(5, 3, 8);
+        assert_eq!((grid.width, grid.height), (1, 1));
+        let mut coarse = HdrImage::new(1, 1);
+        coarse.pixels[0] = [64.0; 3];
+        let mut dst = HdrImage::new(5, 3);
+        add_upsampled(&mut dst, &coarse, &grid);
+        assert!(dst.pixels.iter().all(|p| *p == [1.0; 3]));
+    }
+}

@@ -1,0 +1,199 @@
+//! `flarebench bench`: time ghost rendering per lens and quality preset, with the error
+//! against the reference printed next to each time.
+//!
+//! For each lens and preset the scene is planned (bounds traced for the light) and rendered
+//! `--runs` times; the table gives the median of each stage. With `--error`, the reference
+//! (`ghost_raytrace::reference`) is rendered once per lens at `--error-size` (default: the
+//! bench size) and each preset's image at that size is compared with it.
+
+use std::time::Instant;
+
+use clap::Args;
+use flarebench_sdk::aperture::Aperture;
+use ghost_raytrace::ghosts;
+use ghost_raytrace::plan::{self, PlanOptions};
+use ghost_raytrace::reference::reference_image;
+use ghost_raytrace::scene::{LightSpec, Quality};
+use serde::Serialize;
+
+use super::render::{frame_for, parse_downscale, parse_size};
+use crate::lens_library;
+use crate::table::Table;
+
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    /// Lens files or bundled lens names.
+    #[arg(default_values_t = ["heliar-tronnier".to_string(), "nikon-zoom-short".to_string()])]
+    pub lenses: Vec<String>,
+    /// The light: THETA,PHI[,INTENSITY[,KELVIN]].
+    #[arg(long, default_value = "10,30", value_parser = LightSpec::parse)]
+    pub light: LightSpec,
+    /// Frame size, WxH.
+    #[arg(long, default_value = "1920x1080", value_parser = parse_size)]
+    pub size: (usize, usize),
+    /// Quality presets to time, comma separated.
+    #[arg(long, value_delimiter = ',', default_values_t = Quality::ALL)]
+    pub quality: Vec<Quality>,
+    /// Largest coarse-frame factor (as `render --max-downscale`).
+    #[arg(long, default_value_t = ghost_raytrace::plan::MAX_DOWNSCALE, value_parser = parse_downscale)]
+    pub max_downscale: usize,
+    /// Timed runs per lens and preset (the median is reported).
+    #[arg(long, default_value_t = 5)]
+    pub runs: usize,
+    /// Also render the reference and report each preset's error against it (slow).
+    #[arg(long)]
+    pub error: bool,
+    /// Frame size for the error measurement (default: --size).
+    #[arg(long, value_parser = parse_size)]
+    pub error_size: Option<(usize, usize)>,
+    /// Print the results as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// One lens × preset.
+#[derive(Clone, Debug, Serialize)]
+pub struct BenchRow {
+    pub lens: String,
+    pub quality: Quality,
+    pub width: usize,
+    pub height: usize,
+    pub ghosts_drawn: usize,
+    pub ghosts_total: usize,
+    /// Share of the ghosts' energy left out by the plan.
+    pub dropped_energy_fraction: f64,
+    /// Medians over the runs (milliseconds).
+    pub plan_ms: f64,
+    pub render_ms: f64,
+    pub frame_ms: f64,
+    /// Against the reference at `error_width × error_height` (with `--error`).
+    pub error_width: Option<usize>,
+    pub error_height: Option<usize>,
+    pub relative_rmse: Option<f64>,
+    pub energy_error: Option<f64>,
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
+    anyhow::ensure!(args.runs >= 1, "--runs must be at least 1");
+    let lights = std::slice::from_ref(&args.light);
+    let aperture = Aperture::Circular;
+    let mut rows = Vec::new();
+    for name in &args.lenses {
+        let sys = lens_library::load(name, quiet || args.json)?.system;
+        let frame = frame_for(&sys, args.size);
+        let error_frame = frame_for(&sys, args.error_size.unwrap_or(args.size));
+        let reference = if args.error {
+            if !quiet && !args.json {
+                eprintln!(
+                    "{name}: rendering the reference at {}×{} …",
+                    error_frame.width, error_frame.height
+                );
+            }
+            Some(reference_image(&sys, &aperture, error_frame, lights)?)
+        } else {
+            None
+        };
+        for &q in &args.quality {
+            let opts = PlanOptions {
+                max_downscale: args.max_downscale,
+                ..PlanOptions::for_quality(q, None)
+            };
+            let (mut plan_ms, mut render_ms, mut frame_ms) = (vec![], vec![], vec![]);
+            let mut last = None;
+            for _ in 0..args.runs {
+                let t0 = Instant::now();
+                let plans = plan::plan(&sys, lights, &frame, &opts)?;
+                let t1 = Instant::now();
+                let (img, _) = ghosts::render(&sys, &aperture, frame, &plans)?;
+                let t2 = Instant::now();
+                anyhow::ensure!(!img.has_non_finite(), "non-finite pixels");
+                plan_ms.push((t1 - t0).as_secs_f64() * 1e3);
+                render_ms.push((t2 - t1).as_secs_f64() * 1e3);
+                frame_ms.push((t2 - t0).as_secs_f64() * 1e3);
+                last = Some(plans);
+            }
+            let plans = last.expect("at least one run");
+            let lp = &plans[0];
+            let (total, dropped) = lp.energy();
+            let error = reference
+                .as_ref()
+                .map(|r| -> anyhow::Result<_> {
+                    let plans = plan::plan(&sys, lights, &error_frame, &opts)?;
+                    let img = ghosts::render(&sys, &aperture, error_frame, &plans)?.0;
+                    Ok(img.compare(r)?)
+                })
+                .transpose()?;
+            rows.push(BenchRow {
+                lens: sys.name.clone(),
+                quality: q,
+                width: frame.width,
+                height: frame.height,
+                ghosts_drawn: lp.ghosts.len(),
+                ghosts_total: lp.ghosts.len() + lp.dropped.len(),
+                dropped_energy_fraction: if total > 0.0 { dropped / total } else { 0.0 },
+                plan_ms: median(plan_ms),
+                render_ms: median(render_ms),
+                frame_ms: median(frame_ms),
+                error_width: error.map(|_| error_frame.width),
+                error_height: error.map(|_| error_frame.height),
+                relative_rmse: error.map(|c| c.relative_rmse),
+                energy_error: error.map(|c| c.energy_error),
+            });
+        }
+    }
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&rows)?);
+        return Ok(());
+    }
+    let mut t = Table::new(&[
+        "lens",
+        "quality",
+        "size",
+        "ghosts",
+        "dropped",
+        "plan ms",
+        "render ms",
+        "frame ms",
+        "rel RMSE",
+        "energy",
+    ]);
+    for r in &rows {
+        let pct = |v: Option<f64>| v.map_or("—".to_string(), |v| format!("{:.2}%", 100.0 * v));
+        t.row(vec![
+            r.lens.clone(),
+            r.quality.to_string(),
+            format!("{}×{}", r.width, r.height),
+            format!("{}/{}", r.ghosts_drawn, r.ghosts_total),
+            format!("{:.2}%", 100.0 * r.dropped_energy_fraction),
+            format!("{:.1}", r.plan_ms),
+            format!("{:.1}", r.render_ms),
+            format!("{:.1}", r.frame_ms),
+            pct(r.relative_rmse),
+            pct(r.energy_error),
+        ]);
+    }
+    print!("{}", t.render());
+    println!(
+        "light {},{}; medians of {} runs on {} threads; errors against the reference{}",
+        args.light.theta_deg,
+        args.light.phi_deg,
+        args.runs,
+        rayon::current_num_threads(),
+        match args.error_size {
+            Some((w, h)) if args.error => format!(" at {w}×{h}"),
+            _ if args.error => String::new(),
+            _ => " not measured (--error)".to_string(),
+        }
+    );
+    Ok(())
+}
