@@ -134,7 +134,7 @@ pub fn ghost_mesh(
                 }
                 let sensor_area_px = unit_area * r * r / px_area;
                 let radiance = flux / sensor_area_px;
-                if !(radiance > 0.0) || !radiance.is_finite() {
+                if !(radiance.is_finite() && radiance > 0.0) {
                     continue;
                 }
                 let pts: Vec<[f32; 2]> = unit
