@@ -5,7 +5,7 @@
 //! the NaN scan). Needs the release library first:
 //!
 //! ```sh
-//! cargo build --release -p flarebench-ghost-raytrace
+//! cargo build --release -p flarebench-ghost-raytrace -p flarebench-test-plugin-faulty
 //! cargo bench -p flarebench-ghost-raytrace --bench plugin_overhead
 //! ```
 
@@ -80,6 +80,38 @@ fn bench(c: &mut Criterion) {
     g.finish();
 
     drop(inst);
+
+    // The boundary alone, with the test plugin that only adds a constant to every pixel
+    // (`tests/plugins/faulty`, `level=0`): scene conversion, the host's zeroed image, the
+    // thunk's checks, one pass over the pixels, the NaN scan — an upper bound on what the
+    // boundary adds to any render of that size.
+    let faulty = dir.join(format!(
+        "{}flarebench_test_plugin_faulty{}",
+        std::env::consts::DLL_PREFIX,
+        std::env::consts::DLL_SUFFIX
+    ));
+    match host::load(&faulty) {
+        Ok(p) => {
+            let mut inst = p.instantiate().unwrap();
+            inst.prepare(&sys).unwrap();
+            let values = parse_values(&p.params, "level=0").unwrap();
+            for (w, h) in [(640, 360), (1920, 1080)] {
+                let mut s = scene.clone();
+                s.frame = Frame {
+                    width: w,
+                    height: h,
+                    film_width_mm: sys.film_width_mm,
+                    film_height_mm: sys.film_width_mm * h as f64 / w as f64,
+                };
+                c.bench_function(&format!("boundary_only_{w}x{h}"), |b| {
+                    b.iter(|| inst.render(&s, &values).unwrap())
+                });
+            }
+        }
+        Err(e) => eprintln!(
+            "skipping boundary_only: {e} (cargo build --release -p flarebench-test-plugin-faulty)"
+        ),
+    }
     for (size, quality, pairs) in [
         ((640, 360), Quality::Fast, 41),
         ((1920, 1080), Quality::Default, 9),
