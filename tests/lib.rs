@@ -28,3 +28,30 @@ pub fn library_stems() -> Vec<String> {
     stems.sort();
     stems
 }
+
+/// The target directory this test binary was built into (`target/debug`), where
+/// `cargo build --workspace` puts the plugin libraries (`cdylib`s).
+pub fn build_dir() -> PathBuf {
+    let exe = std::env::current_exe().expect("the test binary has a path");
+    // target/debug/deps/<test>-<hash> → target/debug
+    exe.parent()
+        .and_then(Path::parent)
+        .expect("test binaries live in <target>/<profile>/deps")
+        .to_path_buf()
+}
+
+/// The built plugin library of crate lib `name` (`libNAME.so` on Linux), panicking with the
+/// command to run when it has not been built.
+pub fn plugin_library(name: &str) -> PathBuf {
+    let path = build_dir().join(format!(
+        "{}{name}{}",
+        std::env::consts::DLL_PREFIX,
+        std::env::consts::DLL_SUFFIX
+    ));
+    assert!(
+        path.is_file(),
+        "{} is missing: run `cargo build --workspace` before `cargo test --workspace`",
+        path.display()
+    );
+    path
+}

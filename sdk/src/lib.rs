@@ -17,6 +17,7 @@
 //! surfaces are listed object side first; curvature `c = 1/R` with `R > 0` meaning the centre of
 //! curvature lies toward the sensor; the optical axis is +z toward the sensor.
 
+pub mod abi;
 pub mod aperture;
 pub mod coating;
 pub mod color;

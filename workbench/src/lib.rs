@@ -6,7 +6,9 @@ pub mod aperture_file;
 pub mod cli;
 #[cfg(feature = "tui")]
 pub mod edit;
+pub mod label;
 pub mod lens_library;
 pub mod output;
+pub mod plugin_dirs;
 pub mod report;
 pub mod table;

@@ -9,11 +9,13 @@
 //! - [`ghosts`]: carrying out a plan into a linear HDR image.
 //! - [`reference`]: the dense reference renderer behind every error figure.
 //! - [`error`]: what can go wrong.
+//! - [`plugin`]: the same renderer as a plugin (ABI v1), for `flarebench compare`.
 
 pub mod colour;
 pub mod error;
 pub mod ghosts;
 pub mod plan;
+pub mod plugin;
 pub mod reference;
 pub mod scene;
 

@@ -1,10 +1,12 @@
 //! Command-line interface: argument parsing and dispatch.
 
 mod bench;
+mod compare;
 mod convert;
 #[cfg(feature = "tui")]
 mod edit;
 mod info;
+mod plugins;
 mod precompute;
 mod render;
 mod trace;
@@ -41,6 +43,11 @@ pub enum Command {
     /// Edit a lens prescription in the terminal (spreadsheet, undo, live analysis).
     #[cfg(feature = "tui")]
     Edit(edit::EditArgs),
+    /// Render one scene with several algorithm plugins: side-by-side and difference images,
+    /// median time, error against the reference, items drawn, peak memory.
+    Compare(compare::CompareArgs),
+    /// Flare algorithm plugins: `plugins list`.
+    Plugins(plugins::PluginsArgs),
 }
 
 /// Runs the command line; errors are printed with their causes.
@@ -52,6 +59,8 @@ pub fn main() -> ExitCode {
         Command::Render(a) => render::run(a, cli.quiet),
         Command::Precompute(a) => precompute::run(a, cli.quiet),
         Command::Convert(a) => convert::run(a, cli.quiet),
+        Command::Plugins(a) => plugins::run(a, cli.quiet),
+        Command::Compare(a) => compare::run(a, cli.quiet),
         Command::Bench(a) => bench::run(a, cli.quiet),
         #[cfg(feature = "tui")]
         Command::Edit(a) => edit::run(a, cli.quiet),

@@ -231,7 +231,7 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
 
 /// Exposure (stops) that maps the 99.9th percentile of the lit pixels' luminance to 1;
 /// 0 for an empty image.
-fn auto_exposure(img: &flarebench_sdk::image::HdrImage) -> f32 {
+pub(crate) fn auto_exposure(img: &flarebench_sdk::image::HdrImage) -> f32 {
     let mut lum: Vec<f32> = img
         .pixels
         .iter()

@@ -1,0 +1,112 @@
+//! The ghost renderer as a plugin (ABI v1): the same [`crate::plan::plan`] and
+//! [`crate::ghosts::render`] the workbench calls directly, behind
+//! [`export_plugin!`](flarebench_sdk::export_plugin). Parameters: `quality` (the preset),
+//! `bands` (wavelength bands, 0 for the preset's), `grid_scale` (0 for the preset's).
+
+use flarebench_sdk::LensSystem;
+use flarebench_sdk::abi::author::{
+    FlarePlugin, Output, ParamSpec, Params, PluginError, PluginInfo, PluginKind, Scene,
+};
+
+use crate::ghosts;
+use crate::plan::{self, PlanOptions};
+use crate::scene::{LightSpec, Quality};
+
+const QUALITIES: &[&str] = &["fast", "default", "high"];
+
+/// The plugin: holds the lens between renders.
+#[derive(Debug, Default)]
+pub struct GhostRaytrace {
+    lens: Option<LensSystem>,
+}
+
+/// The scene's lights as the renderer's [`LightSpec`]s.
+pub fn light_specs(scene: &Scene) -> Vec<LightSpec> {
+    scene
+        .lights
+        .iter()
+        .map(|l| LightSpec {
+            theta_deg: l.theta_deg,
+            phi_deg: l.phi_deg,
+            intensity: l.intensity,
+            spectrum: l.spectrum,
+        })
+        .collect()
+}
+
+/// The plan options of a set of parameter values.
+pub fn plan_options(params: &Params<'_>) -> Result<PlanOptions<'static>, PluginError> {
+    let quality = Quality::ALL[params.get_choice("quality")?.min(2)];
+    let mut opts = PlanOptions::for_quality(quality, None);
+    let bands = params.get_int("bands")?;
+    if bands > 0 {
+        opts.bands = bands as usize;
+    }
+    let scale = params.get("grid_scale")?;
+    if scale > 0.0 {
+        opts.grid_scale = scale;
+    }
+    Ok(opts)
+}
+
+impl FlarePlugin for GhostRaytrace {
+    fn info() -> PluginInfo {
+        PluginInfo {
+            name: "ghost-raytrace",
+            version: env!("CARGO_PKG_VERSION"),
+            description: "ghosts by sparse ray grids through the real lens (Hullin et al. 2011), spectral, energy-conserving",
+            kind: PluginKind::Ghosts,
+            params: vec![
+                ParamSpec::choice(
+                    "quality",
+                    "preset: bands, grid size and culling threshold",
+                    QUALITIES,
+                    1,
+                ),
+                ParamSpec::int(
+                    "bands",
+                    "wavelength bands traced (0: the preset's 3/7/15)",
+                    0,
+                    31,
+                    0,
+                ),
+                ParamSpec::float(
+                    "grid_scale",
+                    "multiplier on each ghost's grid (0: the preset's 0.5/1/2)",
+                    0.0,
+                    16.0,
+                    0.0,
+                ),
+            ],
+        }
+    }
+
+    fn create() -> Result<Self, PluginError> {
+        Ok(GhostRaytrace::default())
+    }
+
+    fn prepare(&mut self, lens: &LensSystem) -> Result<(), PluginError> {
+        self.lens = Some(lens.clone());
+        Ok(())
+    }
+
+    fn render(
+        &mut self,
+        scene: &Scene,
+        params: &Params<'_>,
+        out: &mut Output<'_>,
+    ) -> Result<(), PluginError> {
+        let lens = self
+            .lens
+            .as_ref()
+            .ok_or_else(|| PluginError::new("no lens prepared"))?;
+        let opts = plan_options(params)?;
+        let plans = plan::plan(lens, &light_specs(scene), &scene.frame, &opts)?;
+        let (img, _) = ghosts::render(lens, &scene.aperture, scene.frame, &plans)?;
+        out.add_image(&img)?;
+        out.items_drawn = plans.iter().map(|p| p.ghosts.len() as u32).sum();
+        Ok(())
+    }
+}
+
+flarebench_sdk::export_plugin!(GhostRaytrace);

@@ -1,0 +1,469 @@
+//! `flarebench compare`: one scene rendered by several flare algorithm plugins, side by side
+//! with the reference renderer, their differences from it, and a table of median time, error
+//! against the reference, items drawn and peak memory.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, bail};
+use clap::Args;
+use flarebench_sdk::abi::author::{Scene, SceneLight};
+use flarebench_sdk::abi::host::LoadedPlugin;
+use flarebench_sdk::abi::params::parse_values;
+use flarebench_sdk::aperture::Aperture;
+use flarebench_sdk::ghost::render::Frame;
+use flarebench_sdk::image::HdrImage;
+use ghost_raytrace::reference::reference_image;
+use ghost_raytrace::scene::LightSpec;
+use serde::Serialize;
+
+use super::render::{auto_exposure, parse_size};
+use crate::label;
+use crate::lens_library;
+use crate::output::{ToneMap, ToneOperator, save_image};
+use crate::plugin_dirs;
+use crate::report::ErrorReport;
+use crate::table::Table;
+
+#[derive(Debug, Args)]
+pub struct CompareArgs {
+    /// Lens file or the name of a bundled lens.
+    pub lens: String,
+    /// A light at infinity: THETA,PHI[,INTENSITY[,KELVIN]] (degrees; repeatable).
+    #[arg(long = "light", required = true, value_parser = LightSpec::parse)]
+    pub lights: Vec<LightSpec>,
+    /// An algorithm: a plugin name (or library path), optionally with parameters,
+    /// NAME:key=value,key=value. Repeat to compare several (the same plugin may appear twice
+    /// with different parameters).
+    #[arg(long = "algo", required = true)]
+    pub algos: Vec<String>,
+    /// Side-by-side image (.png or .exr); the differences go to the same name with `-diff`.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Renders per algorithm; the table gives the median time.
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    pub runs: u32,
+    /// Size of each tile in pixels, WxH (the frame spans the film's width).
+    #[arg(long, default_value = "320x180", value_parser = parse_size)]
+    pub size: (usize, usize),
+    /// Iris blade count (0: a circular stop).
+    #[arg(long, default_value_t = 0)]
+    pub iris_blades: u32,
+    /// Iris rotation (degrees).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub iris_rotation_deg: f64,
+    /// Blade roundness, 0 (straight) to 1 (a circle).
+    #[arg(long, default_value_t = 0.0)]
+    pub iris_roundness: f64,
+    /// Also load this plugin library (repeatable).
+    #[arg(long = "plugin")]
+    pub plugins: Vec<PathBuf>,
+    /// Skip the reference renderer (no error figures, no difference image).
+    #[arg(long)]
+    pub no_reference: bool,
+    /// Print the results as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// One algorithm's results.
+#[derive(Debug, Serialize)]
+pub struct AlgoResult {
+    /// As given to `--algo`.
+    pub spec: String,
+    pub plugin: String,
+    pub path: String,
+    /// Every parameter's value (defaults included), as text.
+    pub params: Vec<(String, String)>,
+    pub prepare_ms: f64,
+    /// Each run's render time (ms), in order.
+    pub times_ms: Vec<f64>,
+    pub median_ms: f64,
+    /// Error against the reference (none without it, or when the render failed).
+    pub error: Option<ErrorReport>,
+    pub items_drawn: u32,
+    pub mesh_triangles: usize,
+    /// The process's peak resident memory during this algorithm's renders (MiB), from Linux's
+    /// VmHWM after resetting it; none where that is not available.
+    pub peak_rss_mib: Option<f64>,
+    /// Why the algorithm failed, if it did (the others still run).
+    pub failure: Option<String>,
+}
+
+/// The whole comparison (`--json`).
+#[derive(Debug, Serialize)]
+pub struct CompareReport {
+    pub lens: String,
+    pub width: usize,
+    pub height: usize,
+    pub runs: u32,
+    pub reference_ms: Option<f64>,
+    pub output: String,
+    pub difference_output: Option<String>,
+    pub algorithms: Vec<AlgoResult>,
+}
+
+fn ms(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
+}
+
+/// The median of `v` (the mean of the middle two for an even count).
+fn median(v: &[f64]) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    let n = s.len();
+    if n == 0 {
+        f64::NAN
+    } else if n % 2 == 1 {
+        s[n / 2]
+    } else {
+        0.5 * (s[n / 2 - 1] + s[n / 2])
+    }
+}
+
+/// Resets the process's peak resident set size (Linux ≥ 4.0: `5` to `/proc/self/clear_refs`).
+fn reset_peak_rss() -> bool {
+    std::fs::write("/proc/self/clear_refs", "5").is_ok()
+}
+
+/// The process's peak resident set size since the last reset (MiB).
+fn peak_rss_mib() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib / 1024.0)
+}
+
+/// `NAME[:key=value,...]` → (name or path, parameter text).
+fn split_spec(spec: &str) -> (&str, &str) {
+    spec.split_once(':').unwrap_or((spec, ""))
+}
+
+/// Runs one algorithm: load, prepare, `runs` renders.
+fn run_algo(
+    spec: &str,
+    args: &CompareArgs,
+    lens: &flarebench_sdk::LensSystem,
+    scene: &Scene,
+) -> (AlgoResult, Option<HdrImage>) {
+    let (name, param_text) = split_spec(spec);
+    let mut r = AlgoResult {
+        spec: spec.to_string(),
+        plugin: name.to_string(),
+        path: String::new(),
+        params: Vec::new(),
+        prepare_ms: 0.0,
+        times_ms: Vec::new(),
+        median_ms: f64::NAN,
+        error: None,
+        items_drawn: 0,
+        mesh_triangles: 0,
+        peak_rss_mib: None,
+        failure: None,
+    };
+    let run = |r: &mut AlgoResult| -> anyhow::Result<HdrImage> {
+        let plugin: LoadedPlugin = plugin_dirs::find(name, &args.plugins)?;
+        r.plugin = plugin.name.clone();
+        r.path = plugin.path.display().to_string();
+        let values =
+            parse_values(&plugin.params, param_text).with_context(|| format!("--algo {spec}"))?;
+        r.params = plugin
+            .params
+            .iter()
+            .zip(&values)
+            .map(|(p, &v)| (p.name.clone(), p.format_value(v)))
+            .collect();
+        let mut inst = plugin.instantiate()?;
+        let t = Instant::now();
+        inst.prepare(lens)?;
+        r.prepare_ms = ms(t);
+        let rss = reset_peak_rss();
+        let mut last = None;
+        for _ in 0..args.runs {
+            let t = Instant::now();
+            let out = inst.render(scene, &values)?;
+            r.times_ms.push(ms(t));
+            r.items_drawn = out.items_drawn;
+            r.mesh_triangles = out.mesh_triangles;
+            last = Some(out.image);
+        }
+        r.peak_rss_mib = if rss { peak_rss_mib() } else { None };
+        r.median_ms = median(&r.times_ms);
+        Ok(last.expect("at least one run"))
+    };
+    match run(&mut r) {
+        Ok(img) => (r, Some(img)),
+        Err(e) => {
+            r.failure = Some(format!("{e:#}"));
+            (r, None)
+        }
+    }
+}
+
+/// Height of the label strip above each tile (pixels) and the font scale.
+const LABEL_SCALE: usize = 2;
+const LABEL_STRIP: usize = label::GLYPH_H * LABEL_SCALE + 6;
+
+/// Tiles side by side, each under its label; `white` is the linear value drawn for text.
+fn side_by_side(tiles: &[(String, &HdrImage)], w: usize, h: usize, white: f32) -> HdrImage {
+    let mut out = HdrImage::new(
+        tiles.len() * w + (tiles.len().saturating_sub(1)) * 2,
+        h + LABEL_STRIP,
+    );
+    for (i, (text, img)) in tiles.iter().enumerate() {
+        let x0 = i * (w + 2);
+        label::draw(&mut out, x0 + 3, 3, text, LABEL_SCALE, [white; 3]);
+        for y in 0..h {
+            for x in 0..w {
+                if let (Some(p), Some(q)) = (img.get(x, y), out.get_mut(x0 + x, y + LABEL_STRIP)) {
+                    *q = p;
+                }
+            }
+        }
+    }
+    out
+}
+
+/// `|a − b|` per channel.
+fn difference(a: &HdrImage, b: &HdrImage) -> HdrImage {
+    let mut d = HdrImage::new(a.width, a.height);
+    for ((o, p), q) in d.pixels.iter_mut().zip(&a.pixels).zip(&b.pixels) {
+        *o = [
+            (p[0] - q[0]).abs(),
+            (p[1] - q[1]).abs(),
+            (p[2] - q[2]).abs(),
+        ];
+    }
+    d
+}
+
+/// `out.png` → `out-diff.png`.
+fn diff_path(p: &Path) -> PathBuf {
+    let stem = p
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let name = match p.extension() {
+        Some(e) => format!("{stem}-diff.{}", e.to_string_lossy()),
+        None => format!("{stem}-diff"),
+    };
+    p.with_file_name(name)
+}
+
+pub fn run(args: &CompareArgs, quiet: bool) -> anyhow::Result<()> {
+    let loaded = lens_library::load(&args.lens, quiet || args.json)?;
+    let sys = &loaded.system;
+    let (w, h) = args.size;
+    let frame = Frame {
+        width: w,
+        height: h,
+        film_width_mm: sys.film_width_mm,
+        film_height_mm: sys.film_width_mm * h as f64 / w as f64,
+    };
+    let aperture = if args.iris_blades == 0 {
+        Aperture::Circular
+    } else {
+        Aperture::Iris {
+            blades: args.iris_blades,
+            rotation_rad: args.iris_rotation_deg.to_radians(),
+            roundness: args.iris_roundness,
+        }
+    };
+    aperture.validate().context("iris")?;
+    let scene = Scene {
+        lights: args
+            .lights
+            .iter()
+            .map(|l| SceneLight {
+                theta_deg: l.theta_deg,
+                phi_deg: l.phi_deg,
+                intensity: l.intensity,
+                spectrum: l.spectrum,
+            })
+            .collect(),
+        frame,
+        aperture: aperture.clone(),
+    };
+
+    let (reference, reference_ms) = if args.no_reference {
+        (None, None)
+    } else {
+        if !quiet && !args.json {
+            eprintln!("rendering the reference …");
+        }
+        let t = Instant::now();
+        let img = reference_image(sys, &aperture, frame, &args.lights)?;
+        (Some(img), Some(ms(t)))
+    };
+
+    let mut results = Vec::new();
+    let mut images = Vec::new();
+    for spec in &args.algos {
+        if !quiet && !args.json {
+            eprintln!("{spec} …");
+        }
+        let (mut r, img) = run_algo(spec, args, sys, &scene);
+        if let (Some(img), Some(reference)) = (&img, &reference) {
+            let c = img.compare(reference)?;
+            r.error = Some(ErrorReport {
+                relative_rmse: c.relative_rmse,
+                relative_l1: c.relative_l1,
+                energy_error: c.energy_error,
+            });
+        }
+        results.push(r);
+        images.push(img);
+    }
+
+    // Common exposure: the reference's, else the first image's.
+    let base = reference.as_ref().or(images.iter().flatten().next());
+    let exposure_ev = base.map(auto_exposure).unwrap_or(0.0);
+    // Text far above the white point: white after any tone curve.
+    let white = 16.0 * (-exposure_ev).exp2();
+    let tone = ToneMap {
+        exposure_ev,
+        operator: ToneOperator::Aces,
+    };
+    let mut tiles: Vec<(String, &HdrImage)> = Vec::new();
+    if let Some(r) = &reference {
+        tiles.push(("reference".into(), r));
+    }
+    for (r, img) in results.iter().zip(&images) {
+        if let Some(img) = img {
+            tiles.push((r.spec.clone(), img));
+        }
+    }
+    if !tiles.is_empty() {
+        save_image(&side_by_side(&tiles, w, h, white), &args.output, &tone)?;
+    }
+    let mut difference_output = None;
+    if let Some(reference) = &reference {
+        let diffs: Vec<(String, HdrImage)> = results
+            .iter()
+            .zip(&images)
+            .filter_map(|(r, img)| {
+                Some((
+                    format!("{} - reference", r.spec),
+                    difference(img.as_ref()?, reference),
+                ))
+            })
+            .collect();
+        if !diffs.is_empty() {
+            let tiles: Vec<(String, &HdrImage)> =
+                diffs.iter().map(|(s, i)| (s.clone(), i)).collect();
+            let path = diff_path(&args.output);
+            save_image(&side_by_side(&tiles, w, h, white), &path, &tone)?;
+            difference_output = Some(path.display().to_string());
+        }
+    }
+
+    let failed = results.iter().filter(|r| r.failure.is_some()).count();
+    let report = CompareReport {
+        lens: sys.name.clone(),
+        width: w,
+        height: h,
+        runs: args.runs,
+        reference_ms,
+        output: args.output.display().to_string(),
+        difference_output,
+        algorithms: results,
+    };
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        print!("{}", text(&report));
+    }
+    if failed > 0 {
+        bail!(
+            "{failed} of {} algorithms failed (see above)",
+            report.algorithms.len()
+        );
+    }
+    Ok(())
+}
+
+fn text(r: &CompareReport) -> String {
+    let mut s = format!(
+        "{} ({}×{}), {} run{} each",
+        r.lens,
+        r.width,
+        r.height,
+        r.runs,
+        if r.runs == 1 { "" } else { "s" }
+    );
+    if let Some(t) = r.reference_ms {
+        s.push_str(&format!("; reference {t:.1} ms"));
+    }
+    s.push('\n');
+    let mut t = Table::new(&[
+        "algorithm",
+        "median ms",
+        "rel RMSE",
+        "rel L1",
+        "energy",
+        "drawn",
+        "peak MiB",
+        "status",
+    ]);
+    for a in &r.algorithms {
+        let pct = |v: f64| format!("{:.3}%", 100.0 * v);
+        t.row(vec![
+            a.spec.clone(),
+            if a.median_ms.is_finite() {
+                format!("{:.2}", a.median_ms)
+            } else {
+                "-".into()
+            },
+            a.error
+                .as_ref()
+                .map_or("-".into(), |e| pct(e.relative_rmse)),
+            a.error.as_ref().map_or("-".into(), |e| pct(e.relative_l1)),
+            a.error
+                .as_ref()
+                .map_or("-".into(), |e| format!("{:+.3}%", 100.0 * e.energy_error)),
+            a.items_drawn.to_string(),
+            a.peak_rss_mib.map_or("-".into(), |m| format!("{m:.0}")),
+            if a.failure.is_some() {
+                "failed".into()
+            } else {
+                "ok".into()
+            },
+        ]);
+    }
+    s.push_str(&t.render());
+    for a in &r.algorithms {
+        if let Some(f) = &a.failure {
+            s.push_str(&format!("{}: {f}\n", a.spec));
+        }
+    }
+    s.push_str(&format!("wrote {}", r.output));
+    if let Some(d) = &r.difference_output {
+        s.push_str(&format!(" and {d}"));
+    }
+    s.push('\n');
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn median_of_odd_and_even_counts() {
+        assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(&[4.0, 1.0, 3.0, 2.0]), 2.5);
+    }
+
+    #[test]
+    fn algorithm_specs_split_at_the_first_colon() {
+        assert_eq!(split_spec("ghost-raytrace"), ("ghost-raytrace", ""));
+        assert_eq!(
+            split_spec("g:quality=fast,bands=3"),
+            ("g", "quality=fast,bands=3")
+        );
+        assert_eq!(
+            diff_path(Path::new("a/out.png")),
+            Path::new("a/out-diff.png")
+        );
+    }
+}

@@ -1,0 +1,154 @@
+//! `plugins list` and `compare` end to end, with the plugin libraries `cargo build --workspace`
+//! puts beside the binary (`target/debug/`).
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use common::{flarebench, json, temp_dir};
+
+/// A plugin library beside the binary; fails with the command to run when it is missing.
+fn beside_binary(lib: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_BIN_EXE_flarebench"))
+        .parent()
+        .unwrap();
+    let p = dir.join(format!(
+        "{}{lib}{}",
+        std::env::consts::DLL_PREFIX,
+        std::env::consts::DLL_SUFFIX
+    ));
+    assert!(
+        p.is_file(),
+        "{} missing: run `cargo build --workspace` first",
+        p.display()
+    );
+    p
+}
+
+#[test]
+fn plugins_list_shows_the_plugins_beside_the_binary_with_their_parameters() {
+    beside_binary("ghost_raytrace");
+    let v = json(&["plugins", "list", "--json"]);
+    let plugins = v["plugins"].as_array().unwrap();
+    let g = plugins
+        .iter()
+        .find(|p| p["name"] == "ghost-raytrace")
+        .expect("ghost-raytrace is listed");
+    assert_eq!(g["status"], "ok");
+    assert_eq!(g["kind"], "ghosts");
+    assert_eq!(g["abi"], "1.0");
+    let q = &g["params"][0];
+    assert_eq!(q["name"], "quality");
+    assert_eq!(q["type"], "choice");
+    assert_eq!(q["choices"], serde_json::json!(["fast", "default", "high"]));
+    assert_eq!(q["default"], 1.0);
+}
+
+#[test]
+fn a_broken_library_on_the_plugin_path_is_listed_with_the_reason() {
+    let dir = temp_dir("plugins-broken");
+    let bad = dir.join(format!(
+        "{}not_a_plugin{}",
+        std::env::consts::DLL_PREFIX,
+        std::env::consts::DLL_SUFFIX
+    ));
+    std::fs::write(&bad, "not a shared library").unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_flarebench"))
+        .args(["plugins", "list"])
+        .env("FLAREBENCH_PLUGIN_PATH", &dir)
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("broken"), "{text}");
+    assert!(text.contains("could not load the library"), "{text}");
+    assert!(text.contains("not_a_plugin"), "{text}");
+}
+
+#[test]
+fn compare_runs_each_algorithm_and_reports_a_failing_one_without_stopping() {
+    beside_binary("example_glow");
+    beside_binary("flarebench_test_plugin_faulty");
+    let dir = temp_dir("compare");
+    let out_png = dir.join("cmp.png");
+    let out = flarebench(&[
+        "compare",
+        "heliar-tronnier",
+        "--light",
+        "2,0",
+        "--algo",
+        "example-glow:sigma_px=2",
+        "--algo",
+        "test-faulty:fault=panic_render",
+        "--algo",
+        "test-faulty:level=0.5",
+        "--size",
+        "64x36",
+        "--runs",
+        "3",
+        "--no-reference",
+        "--json",
+        "-o",
+        out_png.to_str().unwrap(),
+    ]);
+    // One algorithm failed: exit code 1, but the others ran and the image was written.
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let algos = v["algorithms"].as_array().unwrap();
+    assert_eq!(algos.len(), 3);
+    assert_eq!(algos[0]["plugin"], "example-glow");
+    assert_eq!(algos[0]["times_ms"].as_array().unwrap().len(), 3);
+    assert_eq!(algos[0]["items_drawn"], 1);
+    assert_eq!(algos[0]["params"][0], serde_json::json!(["sigma_px", "2"]));
+    let failure = algos[1]["failure"].as_str().unwrap();
+    assert!(failure.contains("panicked in render"), "{failure}");
+    assert!(failure.contains("asked to panic in render"), "{failure}");
+    assert!(algos[2]["failure"].is_null());
+    assert!(algos[2]["median_ms"].as_f64().unwrap() >= 0.0);
+    let img = image::open(&out_png).unwrap();
+    // Two tiles (the failed algorithm has none) of 64 px with a 2 px gap.
+    assert_eq!(img.width(), 2 * 64 + 2);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("1 of 3 algorithms failed"), "{stderr}");
+}
+
+#[test]
+fn compare_refuses_an_unknown_plugin_or_parameter_clearly() {
+    let dir = temp_dir("compare-bad");
+    let o = dir.join("x.png");
+    let out = flarebench(&[
+        "compare",
+        "heliar-tronnier",
+        "--light",
+        "2,0",
+        "--algo",
+        "no-such-plugin",
+        "--no-reference",
+        "-o",
+        o.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stdout);
+    assert!(err.contains("no plugin named `no-such-plugin`"), "{err}");
+    let out = flarebench(&[
+        "compare",
+        "heliar-tronnier",
+        "--light",
+        "2,0",
+        "--algo",
+        "example-glow:sigma_px=0",
+        "--no-reference",
+        "-o",
+        o.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        err.contains("parameter `sigma_px`: `0` is not float in 0.5..=500"),
+        "{err}"
+    );
+    assert_eq!(out.status.code(), Some(1));
+}
