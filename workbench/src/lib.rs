@@ -4,7 +4,10 @@
 
 pub mod aperture_file;
 pub mod cli;
+pub mod compose;
+pub mod input_image;
 pub mod lens_library;
 pub mod output;
 pub mod report;
+pub mod sources;
 pub mod table;
