@@ -80,8 +80,8 @@ impl StarburstPattern {
             rows_iter(top, upper, p, half)
                 .into_par_iter()
                 .for_each_init(
-                    || vec![0f32; p],
-                    |blend, (j, out)| sum_row(data, p, c, j, &scaled, blend, out),
+                    || RowScratch::new(p),
+                    |scratch, (j, out)| sum_row(data, p, c, j, &scaled, scratch, out),
                 );
         }
         // Rows 1..half are the point reflections of rows p−1..half+1; column 0 of those rows
@@ -94,10 +94,10 @@ impl StarburstPattern {
                 dst[i] = src[p - i];
             }
         }
-        let mut blend = vec![0f32; p];
+        let mut scratch = RowScratch::new(p);
         for j in 1..half {
             let mut row = vec![[0f32; 3]; p];
-            sum_row(data, p, c, j, &scaled, &mut blend, &mut row);
+            sum_row(data, p, c, j, &scaled, &mut scratch, &mut row);
             low[j * p] = row[0];
         }
         StarburstPattern {
@@ -179,17 +179,42 @@ fn rows_iter<'a>(
         .collect()
 }
 
-/// Row `j` of the spectral sum into `out` (overwritten); `blend` is scratch of `p` values.
+/// Per-thread buffers of [`sum_row`]: the blended source row, one line's samples along the
+/// output row, and the three channel sums (separate, so the sums vectorise).
+struct RowScratch {
+    blend: Vec<f32>,
+    samples: Vec<f32>,
+    acc: [Vec<f32>; 3],
+}
+
+impl RowScratch {
+    fn new(p: usize) -> Self {
+        RowScratch {
+            blend: vec![0.0; p],
+            samples: vec![0.0; p],
+            acc: [vec![0.0; p], vec![0.0; p], vec![0.0; p]],
+        }
+    }
+}
+
+/// Row `j` of the spectral sum into `out` (overwritten).
 fn sum_row(
     data: &[f32],
     p: usize,
     c: f64,
     j: usize,
     lines: &[Line],
-    blend: &mut [f32],
+    scratch: &mut RowScratch,
     out: &mut [[f32; 3]],
 ) {
-    out.fill([0.0; 3]);
+    let RowScratch {
+        blend,
+        samples,
+        acc,
+    } = scratch;
+    for a in acc.iter_mut() {
+        a.fill(0.0);
+    }
     for line in lines {
         let (j0, fy) = source(c + (j as f64 - c) * line.s, p);
         let r0 = &data[j0 as usize * p..][..p];
@@ -197,17 +222,21 @@ fn sum_row(
         // Columns this row reads: from the first to one past the last output column's source.
         let lo = line.columns[0].0 as usize;
         let hi = (line.columns[p - 1].0 as usize + 2).min(p);
-        for x in lo..hi {
-            blend[x] = r0[x] + fy * (r1[x] - r0[x]);
+        for ((b, &a0), &a1) in blend[lo..hi].iter_mut().zip(&r0[lo..hi]).zip(&r1[lo..hi]) {
+            *b = a0 + fy * (a1 - a0);
         }
-        let [wr, wg, wb] = line.weight;
-        for (o, &(i0, fx)) in out.iter_mut().zip(&line.columns) {
+        for (v, &(i0, fx)) in samples.iter_mut().zip(&line.columns) {
             let a = blend[i0 as usize];
             let b = blend[i0 as usize + 1];
-            let v = a + fx * (b - a);
-            o[0] += wr * v;
-            o[1] += wg * v;
-            o[2] += wb * v;
+            *v = a + fx * (b - a);
         }
+        for (a, &w) in acc.iter_mut().zip(&line.weight) {
+            for (o, &v) in a.iter_mut().zip(samples.iter()) {
+                *o += w * v;
+            }
+        }
+    }
+    for (i, o) in out.iter_mut().enumerate() {
+        *o = [acc[0][i], acc[1][i], acc[2][i]];
     }
 }
