@@ -19,9 +19,10 @@
 //! a feather of 1/64. The ghost renderer feathers over about one output pixel
 //! (`ghost::render::feather_width`).
 //!
-//! **Dust and scratches** (issue #4) are not part of the opening. A caller with such an
-//! overlay multiplies the opening's transmission by the overlay's
-//! [`ApertureMask::transmission`] sampled at the same `(u, v)`.
+//! **Dust and scratches** are not part of the opening: they are an optional overlay, an
+//! [`ApertureMask`] over the same square whose transmission multiplies the opening's at the
+//! same `(u, v)` ([`Aperture::rasterize_with_overlay`]; the starburst takes it, so dust shows
+//! as the fine streaks and speckle it adds to a starburst).
 
 mod iris;
 mod mask;
@@ -160,6 +161,17 @@ impl Aperture {
     /// antialiased image whose area matches [`Self::open_area`] to first order. The starburst
     /// takes its Fourier transform.
     pub fn rasterize(&self, width: usize, height: usize) -> Result<ApertureMask, ApertureError> {
+        self.rasterize_with_overlay(width, height, None)
+    }
+
+    /// [`Self::rasterize`], each texel multiplied by an optional dust/scratch overlay's
+    /// bilinear transmission at the texel centre (module docs).
+    pub fn rasterize_with_overlay(
+        &self,
+        width: usize,
+        height: usize,
+        overlay: Option<&ApertureMask>,
+    ) -> Result<ApertureMask, ApertureError> {
         mask::check_size(width, height)?;
         let sampler = self.sampler();
         let (du, dv) = (2.0 / width as f64, 2.0 / height as f64);
@@ -169,7 +181,8 @@ impl Aperture {
             let v = 1.0 - (row as f64 + 0.5) * dv;
             for col in 0..width {
                 let u = -1.0 + (col as f64 + 0.5) * du;
-                data.push(sampler.transmission_soft(u as f32, v as f32, feather));
+                let dust = overlay.map_or(1.0, |m| m.transmission(u as f32, v as f32));
+                data.push(sampler.transmission_soft(u as f32, v as f32, feather) * dust);
             }
         }
         ApertureMask::from_luma_f32(width, height, &data)

@@ -29,6 +29,7 @@ pub mod io;
 pub mod paraxial;
 pub mod raster;
 pub mod spectrum;
+pub mod starburst;
 pub mod system;
 pub mod trace;
 

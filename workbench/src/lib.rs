@@ -4,11 +4,14 @@
 
 pub mod aperture_file;
 pub mod cli;
+pub mod compose;
 #[cfg(feature = "tui")]
 pub mod edit;
+pub mod input_image;
 pub mod label;
 pub mod lens_library;
 pub mod output;
 pub mod plugin_dirs;
 pub mod report;
+pub mod sources;
 pub mod table;

@@ -1,4 +1,4 @@
-//! Writing rendered images: OpenEXR (linear, 32-bit float, lossless ZIP) and PNG (tone mapped,
+//! Writing rendered images: OpenEXR (linear, 32-bit or 16-bit float, lossless ZIP) and PNG (tone mapped,
 //! sRGB-encoded, 8 bits per channel), chosen by the file's extension, saved atomically (a
 //! temporary file beside the target, synced, then renamed over it).
 //!
@@ -7,7 +7,9 @@
 //! `f(x) = x (2.51 x + 0.03) / (x (2.43 x + 0.59) + 0.14)` per channel, which rolls bright
 //! ghosts off to white instead of clipping them, or a plain clamp — then encoded with the sRGB
 //! transfer function (IEC 61966-2-1) and rounded to 8 bits. Negative and NaN values become 0.
-//! EXR files keep the linear values exactly.
+//! EXR files keep the linear values exactly in f32; half floats ([`ExrPrecision::Half`]) round
+//! each value to the nearest f16 (11 significant bits, largest finite 65504; larger values
+//! become +∞).
 
 use std::io::Cursor;
 use std::path::Path;
@@ -89,9 +91,30 @@ impl ToneMap {
     }
 }
 
-/// Saves `img` to `path` as EXR or PNG (by extension), atomically.
+/// The sample type of an EXR file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum ExrPrecision {
+    /// 32-bit float (exact).
+    #[default]
+    Float,
+    /// 16-bit half float (half the size; see the module docs).
+    Half,
+}
+
+/// Saves `img` to `path` as EXR (f32) or PNG (by extension), atomically.
 pub fn save_image(img: &HdrImage, path: &Path, tone: &ToneMap) -> Result<()> {
+    save_image_as(img, path, tone, ExrPrecision::Float)
+}
+
+/// [`save_image`] with the EXR sample type chosen.
+pub fn save_image_as(
+    img: &HdrImage,
+    path: &Path,
+    tone: &ToneMap,
+    precision: ExrPrecision,
+) -> Result<()> {
     let bytes = match OutputFormat::from_path(path)? {
+        OutputFormat::Exr if precision == ExrPrecision::Half => encode_exr_half(img),
         OutputFormat::Exr => encode_exr(img),
         OutputFormat::Png => encode_png(img, tone),
     }
@@ -113,6 +136,33 @@ pub fn encode_exr(img: &HdrImage) -> Result<Vec<u8>> {
         SpecificChannels::rgb(|pos: Vec2<usize>| {
             let p = pixels[pos.y() * width + pos.x()];
             (p[0], p[1], p[2])
+        }),
+    );
+    let mut bytes = Cursor::new(Vec::new());
+    Image::from_layer(layer)
+        .write()
+        .to_buffered(&mut bytes)
+        .map_err(|e| anyhow::anyhow!("EXR encoder: {e}"))?;
+    Ok(bytes.into_inner())
+}
+
+/// The image as a half-float OpenEXR file in memory (channels R, G, B as f16, ZIP).
+pub fn encode_exr_half(img: &HdrImage) -> Result<Vec<u8>> {
+    use exr::prelude::*;
+    check_size(img)?;
+    let width = img.width;
+    let pixels = &img.pixels;
+    let layer = Layer::new(
+        (img.width, img.height),
+        LayerAttributes::named("flarebench"),
+        Encoding::SMALL_LOSSLESS,
+        SpecificChannels::rgb(|pos: Vec2<usize>| {
+            let p = pixels[pos.y() * width + pos.x()];
+            (
+                f16::from_f32(p[0]),
+                f16::from_f32(p[1]),
+                f16::from_f32(p[2]),
+            )
         }),
     );
     let mut bytes = Cursor::new(Vec::new());
@@ -229,6 +279,33 @@ mod tests {
             .map(|e| e.unwrap().file_name())
             .collect();
         assert_eq!(names, vec![std::ffi::OsString::from("flare.exr")]);
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn half_exr_rounds_to_f16_and_is_smaller() {
+        let dir = temp_dir("exr-half");
+        let (full, half) = (dir.join("f.exr"), dir.join("h.exr"));
+        let img = HdrImage::from_pixels(
+            4,
+            1,
+            vec![
+                [0.1, 1.0, 3.0],
+                [1e5, 0.0, 2049.0],
+                [6.0e-8, 0.333, 0.5],
+                [1.0; 3],
+            ],
+        )
+        .unwrap();
+        save_image_as(&img, &half, &ToneMap::default(), ExrPrecision::Half).unwrap();
+        save_image(&img, &full, &ToneMap::default()).unwrap();
+        let back = read_exr(&half).unwrap();
+        // f16: 0.1 → 0.099975586, 0.333 → 0.33300781, 2049 → 2048 (ties to even), 1e5 → +∞
+        // (beyond 65504), 6e-8 → the subnormal 5.96e-8.
+        assert_eq!(back.pixels[0], [0.099_975_586, 1.0, 3.0]);
+        assert_eq!(back.pixels[1], [f32::INFINITY, 0.0, 2048.0]);
+        assert_eq!(back.pixels[2], [5.960_464_5e-8, 0.333_007_8, 0.5]);
+        assert!(fs::metadata(&half).unwrap().len() < fs::metadata(&full).unwrap().len());
         fs::remove_dir_all(&dir).unwrap();
     }
 

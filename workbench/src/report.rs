@@ -2,6 +2,8 @@
 
 use serde::Serialize;
 
+use crate::compose::StarburstLine;
+
 use flarebench_sdk::ghost::render::GhostStats;
 use ghost_raytrace::plan::{DropReason, LightPlan};
 
@@ -11,6 +13,8 @@ pub struct Timings {
     pub load_ms: f64,
     pub plan_ms: f64,
     pub render_ms: f64,
+    /// Starbursts: patterns (transforms and spectral sums) and adding them.
+    pub starburst_ms: f64,
     pub write_ms: f64,
     pub reference_ms: Option<f64>,
 }
@@ -80,6 +84,8 @@ pub struct RenderReport {
     /// Exposure applied to a PNG (stops).
     pub exposure_ev: f32,
     pub lights: Vec<LightReport>,
+    /// One entry per light when starbursts are on (`compose::StarburstLine`).
+    pub starbursts: Vec<StarburstLine>,
     pub error: Option<ErrorReport>,
 }
 
@@ -135,10 +141,11 @@ impl RenderReport {
             self.lens, self.output, self.width, self.height, self.quality
         );
         s += &format!(
-            "time: load {:.1} ms, plan {:.1} ms, render {:.1} ms, write {:.1} ms{}\n",
+            "time: load {:.1} ms, plan {:.1} ms, render {:.1} ms, starburst {:.1} ms, write {:.1} ms{}\n",
             t.load_ms,
             t.plan_ms,
             t.render_ms,
+            t.starburst_ms,
             t.write_ms,
             t.reference_ms
                 .map_or(String::new(), |r| format!(", reference {r:.1} ms"))
@@ -169,6 +176,23 @@ impl RenderReport {
                     g.downscale
                 );
             }
+        }
+        for b in &self.starbursts {
+            s += &match (&b.left_out, b.position_px) {
+                (Some(why), _) => format!("starburst of light {}: left out ({why})\n", b.light),
+                (None, Some([x, y])) => format!(
+                    "starburst of light {} at pixel ({x:.1}, {y:.1}): flux {:.4e}, {:.3}% in the frame, reach {:.0} px\n",
+                    b.light,
+                    b.flux,
+                    if b.flux > 0.0 {
+                        100.0 * b.added / b.flux
+                    } else {
+                        0.0
+                    },
+                    b.reach_px
+                ),
+                (None, None) => String::new(),
+            };
         }
         if let Some(e) = &self.error {
             s += &format!(

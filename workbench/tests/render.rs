@@ -18,6 +18,8 @@ fn render_writes_an_image_and_reports_what_it_did() {
         "192x108",
         "--quality",
         "fast",
+        "--starburst",
+        "off",
         "-o",
         out.to_str().unwrap(),
         "--json",

@@ -1,5 +1,6 @@
 //! Command-line interface: argument parsing and dispatch.
 
+mod apply;
 mod bench;
 mod compare;
 mod convert;
@@ -32,8 +33,10 @@ pub enum Command {
     Info(info::InfoArgs),
     /// Precompute ghost bounds over a range of incidence angles (for `render --precomputed`).
     Precompute(precompute::PrecomputeArgs),
-    /// Render the ghost flares of a lens for one or more lights to an HDR image.
+    /// Render the ghost flares and starbursts of a lens for one or more lights to an HDR image.
     Render(render::RenderArgs),
+    /// Find the bright lights in an image and add the lens's flare to it.
+    Apply(apply::ApplyArgs),
     /// Trace one collimated ray through a lens and show every surface it meets.
     Trace(trace::TraceArgs),
     /// Time ghost rendering per lens and quality preset, with the error against the reference.
@@ -57,6 +60,7 @@ pub fn main() -> ExitCode {
         Command::Info(a) => info::run(a, cli.quiet),
         Command::Trace(a) => trace::run(a, cli.quiet),
         Command::Render(a) => render::run(a, cli.quiet),
+        Command::Apply(a) => apply::run(a, cli.quiet),
         Command::Precompute(a) => precompute::run(a, cli.quiet),
         Command::Convert(a) => convert::run(a, cli.quiet),
         Command::Plugins(a) => plugins::run(a, cli.quiet),

@@ -1,20 +1,25 @@
-//! `flarebench render`: ghost flares of a lens for one or more lights, to EXR or PNG.
+//! `flarebench render`: ghost flares and diffraction starbursts of a lens for one or more
+//! lights, to EXR or PNG, optionally added onto a background image.
 
 use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::Context;
 use clap::Args;
-use flarebench_sdk::aperture::Aperture;
+use flarebench_sdk::aperture::{Aperture, ApertureMask};
 use flarebench_sdk::ghost::render::Frame;
+use flarebench_sdk::starburst::{StarburstCache, StarburstSettings};
 
 use ghost_raytrace::plan::PlanOptions;
 use ghost_raytrace::reference::reference_image;
 use ghost_raytrace::scene::{LightSpec, Quality};
 use ghost_raytrace::{ghosts, plan};
 
+use crate::aperture_file::{MaskEncoding, load_aperture_mask};
+use crate::compose::{StarburstSetup, add_onto, add_starbursts};
+use crate::input_image::read_input_image;
 use crate::lens_library;
-use crate::output::{ToneMap, ToneOperator, save_image};
+use crate::output::{ExrPrecision, ToneMap, ToneOperator, save_image_as};
 use crate::report::{ErrorReport, LightReport, RenderReport, Timings};
 use flarebench_sdk::ghost::table::BoundsTable;
 
@@ -28,10 +33,10 @@ pub struct RenderArgs {
     /// lights.
     #[arg(long = "light", required = true, value_parser = LightSpec::parse)]
     pub lights: Vec<LightSpec>,
-    /// Output size in pixels, WxH. The frame spans the film's width; its height follows the
-    /// aspect ratio.
-    #[arg(long, default_value = "1920x1080", value_parser = parse_size)]
-    pub size: (usize, usize),
+    /// Output size in pixels, WxH (default 1920x1080, or the background's size). The frame
+    /// spans the film's width; its height follows the aspect ratio.
+    #[arg(long, value_parser = parse_size)]
+    pub size: Option<(usize, usize)>,
     /// Speed against accuracy: fast, default or high (docs/performance.md gives each one's error).
     #[arg(long, default_value_t = Quality::Default)]
     pub quality: Quality,
@@ -51,6 +56,17 @@ pub struct RenderArgs {
     /// Trace the ghosts in f64 instead of f32 (slower; for checking precision).
     #[arg(long)]
     pub f64: bool,
+    #[command(flatten)]
+    pub starburst: StarburstArgs,
+    /// Add the flare onto this image (.exr linear, .png/.bmp sRGB) in linear light; the
+    /// output takes its size. A PNG output is then written with exposure 0 and the clamp
+    /// curve unless --exposure-ev or --tone say otherwise, so untouched pixels keep their
+    /// values.
+    #[arg(long)]
+    pub background: Option<PathBuf>,
+    /// Write EXR as 16-bit half floats instead of 32-bit floats.
+    #[arg(long)]
+    pub exr_half: bool,
     /// Ghost bounds from `flarebench precompute` (else traced for each light).
     #[arg(long)]
     pub precomputed: Option<PathBuf>,
@@ -64,15 +80,57 @@ pub struct RenderArgs {
     /// reach white.
     #[arg(long, allow_negative_numbers = true)]
     pub exposure_ev: Option<f32>,
-    /// PNG tone curve.
-    #[arg(long, value_enum, default_value_t = ToneOperator::Aces)]
-    pub tone: ToneOperator,
+    /// PNG tone curve (default aces; clamp with --background).
+    #[arg(long, value_enum)]
+    pub tone: Option<ToneOperator>,
     /// Print the report (time per stage, ghosts traced and left out, energies).
     #[arg(long)]
     pub report: bool,
     /// Print the report as one JSON object.
     #[arg(long)]
     pub json: bool,
+}
+
+/// What the flare is made of.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum StarburstMode {
+    /// Ghosts and starbursts.
+    On,
+    /// Ghosts only.
+    Off,
+    /// Starbursts only.
+    Only,
+}
+
+/// Starburst options shared by `render` and `apply`.
+#[derive(Debug, Args)]
+pub struct StarburstArgs {
+    /// Diffraction starburst: on (with the ghosts), off (ghosts only) or only.
+    #[arg(long, value_enum, default_value_t = StarburstMode::On)]
+    pub starburst: StarburstMode,
+    /// Texels across the pupil for the starburst's transform (padded 4×): the pattern reaches
+    /// ±TEXELS·λ·N/2 on the sensor; 256 gives a 1024² transform.
+    #[arg(long, default_value_t = 256)]
+    pub starburst_texels: usize,
+    /// Dust/scratch overlay on the aperture for the starburst (PNG or BMP, white clear).
+    #[arg(long)]
+    pub dust: Option<PathBuf>,
+}
+
+impl StarburstArgs {
+    /// The settings (64 wavelengths, padding 4) and the dust overlay, read and checked.
+    pub fn load(&self) -> anyhow::Result<(StarburstSettings, Option<ApertureMask>)> {
+        let settings = StarburstSettings {
+            pupil_texels: self.starburst_texels,
+            ..StarburstSettings::default()
+        };
+        settings.validate().context("--starburst-texels")?;
+        let dust = match &self.dust {
+            Some(p) => Some(load_aperture_mask(p, MaskEncoding::Transmission)?.mask),
+            None => None,
+        };
+        Ok((settings, dust))
+    }
 }
 
 /// The output frame: `size` pixels spanning the film's width, the height following the
@@ -122,8 +180,27 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
     let loaded = lens_library::load(&args.lens, quiet || args.json)?;
     let sys = &loaded.system;
     let mut timings = Timings::default();
-    let (w, h) = args.size;
-    let frame = frame_for(sys, args.size);
+    let background = match &args.background {
+        Some(p) => Some(read_input_image(p)?.image),
+        None => None,
+    };
+    let (w, h) = match (&background, args.size) {
+        (Some(bg), Some(size)) => {
+            anyhow::ensure!(
+                size == (bg.width, bg.height),
+                "--size {}x{} differs from the background's {}x{}",
+                size.0,
+                size.1,
+                bg.width,
+                bg.height
+            );
+            size
+        }
+        (Some(bg), None) => (bg.width, bg.height),
+        (None, size) => size.unwrap_or((1920, 1080)),
+    };
+    let (starburst_settings, dust) = args.starburst.load()?;
+    let frame = frame_for(sys, (w, h));
     let aperture = if args.iris_blades == 0 {
         Aperture::Circular
     } else {
@@ -157,11 +234,16 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
         max_downscale: args.max_downscale,
         ..PlanOptions::for_quality(q, table.as_ref())
     };
-    let plans = plan::plan(sys, &args.lights, &frame, &opts)?;
+    let mode = args.starburst.starburst;
+    let plans = if mode == StarburstMode::Only {
+        Vec::new()
+    } else {
+        plan::plan(sys, &args.lights, &frame, &opts)?
+    };
     timings.plan_ms = ms(t);
 
     let t = Instant::now();
-    let (img, stats) = ghosts::render_with(
+    let (mut img, stats) = ghosts::render_with(
         sys,
         &aperture,
         frame,
@@ -190,13 +272,48 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
         None
     };
 
+    // Starbursts after the reference comparison, which is of the ghosts alone.
     let t = Instant::now();
-    let exposure_ev = args.exposure_ev.unwrap_or_else(|| auto_exposure(&img));
+    let starbursts = if mode == StarburstMode::Off {
+        Vec::new()
+    } else {
+        let setup = StarburstSetup {
+            aperture: &aperture,
+            dust: dust.as_ref(),
+            settings: starburst_settings,
+        };
+        let mut cache = StarburstCache::new();
+        add_starbursts(&mut img, sys, &frame, &args.lights, &setup, &mut cache)?
+    };
+    timings.starburst_ms = ms(t);
+
+    let t = Instant::now();
+    let (exposure_ev, operator) = match &background {
+        Some(_) => (
+            args.exposure_ev.unwrap_or(0.0),
+            args.tone.unwrap_or(ToneOperator::Clamp),
+        ),
+        None => (
+            args.exposure_ev.unwrap_or_else(|| auto_exposure(&img)),
+            args.tone.unwrap_or(ToneOperator::Aces),
+        ),
+    };
     let tone = ToneMap {
         exposure_ev,
-        operator: args.tone,
+        operator,
     };
-    save_image(&img, &args.output, &tone)?;
+    let precision = if args.exr_half {
+        ExrPrecision::Half
+    } else {
+        ExrPrecision::Float
+    };
+    let flare_sum = img.sum();
+    let flare_max = img.max();
+    let out = match &background {
+        Some(bg) => add_onto(bg, &img)?,
+        None => img,
+    };
+    save_image_as(&out, &args.output, &tone, precision)?;
     timings.write_ms = ms(t);
 
     let lights: Vec<LightReport> = plans
@@ -213,10 +330,11 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
         timings,
         rays_traced: stats.iter().flatten().map(|s| s.rays).sum(),
         triangles: stats.iter().flatten().map(|s| s.triangles).sum(),
-        image_sum_rgb: img.sum(),
-        image_max: img.max(),
+        image_sum_rgb: flare_sum,
+        image_max: flare_max,
         exposure_ev,
         lights,
+        starbursts,
         error,
     };
     if args.json {
