@@ -200,3 +200,51 @@ fn bench_times_each_preset_and_reports_what_it_drew() {
     // A finer preset keeps at least as many ghosts (its energy threshold is lower).
     assert!(rows[1]["ghosts_drawn"].as_u64() >= rows[0]["ghosts_drawn"].as_u64());
 }
+
+#[test]
+fn a_light_placed_by_its_image_position_images_there() {
+    let out = temp_dir("render").join("at.exr");
+    let v = json(&[
+        "render",
+        "heliar-tronnier",
+        "--light-at",
+        "1500,250,2,3200",
+        "--size",
+        "1920x1080",
+        "--quality",
+        "fast",
+        "-o",
+        out.to_str().unwrap(),
+        "--json",
+    ]);
+    let light = &v["lights"][0];
+    let (theta, phi) = (
+        light["theta_deg"].as_f64().unwrap(),
+        light["phi_deg"].as_f64().unwrap(),
+    );
+    assert!(theta > 5.0 && theta < 20.0, "θ {theta}");
+    assert_eq!(light["intensity"].as_f64(), Some(2.0));
+    // The starburst sits where the chief ray lands: the requested pixel.
+    let at = &v["starbursts"][0]["position_px"];
+    let (x, y) = (at[0].as_f64().unwrap(), at[1].as_f64().unwrap());
+    assert!(
+        (x - 1500.0).abs() < 0.01 && (y - 250.0).abs() < 0.01,
+        "({x}, {y}), φ {phi}"
+    );
+    // Nonsense is refused with the option named.
+    for bad in ["1500", "a,b", "1,2,-1", "1,2,3,1:2"] {
+        let o = flarebench(&[
+            "render",
+            "heliar-tronnier",
+            "--light-at",
+            bad,
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert!(!o.status.success(), "{bad}");
+        assert!(
+            String::from_utf8_lossy(&o.stderr).contains("light"),
+            "{bad}"
+        );
+    }
+}

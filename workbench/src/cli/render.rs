@@ -31,8 +31,14 @@ pub struct RenderArgs {
     /// degrees, irradiance (default 1), colour as a blackbody temperature in kelvin (e.g.
     /// 3200) or linear sRGB R:G:B (e.g. 1:0.8:0.6); default daylight D65. Repeat for several
     /// lights.
-    #[arg(long = "light", required = true, value_parser = LightSpec::parse)]
+    #[arg(long = "light", required_unless_present = "lights_at", value_parser = LightSpec::parse)]
     pub lights: Vec<LightSpec>,
+    /// A light given by where it images: X,Y[,INTENSITY[,COLOUR]] — pixel coordinates in the
+    /// output image ((0,0) its top-left corner, 960,540 the centre of 1920x1080), the rest as
+    /// for --light. The direction is found by aiming the lens's real chief ray at that point
+    /// (distortion included). Repeat for several lights; combines with --light.
+    #[arg(long = "light-at", value_parser = LightAt::parse)]
+    pub lights_at: Vec<LightAt>,
     /// Output size in pixels, WxH (default 1920x1080, or the background's size). The frame
     /// spans the film's width; its height follows the aspect ratio.
     #[arg(long, value_parser = parse_size)]
@@ -133,6 +139,66 @@ impl StarburstArgs {
     }
 }
 
+/// A light placed by its image position: `X,Y[,INTENSITY[,COLOUR]]`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LightAt {
+    /// Pixel coordinates in the output image, x right, y down.
+    pub x: f64,
+    pub y: f64,
+    /// `INTENSITY[,COLOUR]` as `--light` takes them (may be empty).
+    pub rest: String,
+}
+
+impl LightAt {
+    pub fn parse(s: &str) -> Result<LightAt, String> {
+        let parts: Vec<&str> = s.splitn(3, ',').map(str::trim).collect();
+        if parts.len() < 2 {
+            return Err(format!(
+                "--light-at takes X,Y[,INTENSITY[,COLOUR]], got `{s}`"
+            ));
+        }
+        let coord = |v: &str, what: &str| {
+            v.parse::<f64>()
+                .ok()
+                .filter(|c| c.is_finite())
+                .ok_or_else(|| format!("--light-at `{s}`: {what} `{v}` is not a finite number"))
+        };
+        let light = LightAt {
+            x: coord(parts[0], "X")?,
+            y: coord(parts[1], "Y")?,
+            rest: parts.get(2).map(|r| r.to_string()).unwrap_or_default(),
+        };
+        // Check INTENSITY and COLOUR now, with a placeholder direction.
+        light.with_direction(0.0, 0.0)?;
+        Ok(light)
+    }
+
+    /// The light with direction `(theta_deg, phi_deg)`.
+    pub fn with_direction(&self, theta_deg: f64, phi_deg: f64) -> Result<LightSpec, String> {
+        let spec = if self.rest.is_empty() {
+            format!("{theta_deg},{phi_deg}")
+        } else {
+            format!("{theta_deg},{phi_deg},{}", self.rest)
+        };
+        LightSpec::parse(&spec).map_err(|e| e.to_string())
+    }
+}
+
+/// The lights of `--light` followed by those of `--light-at`, aimed by the chief ray.
+fn scene_lights(
+    sys: &flarebench_sdk::LensSystem,
+    frame: &Frame,
+    args: &RenderArgs,
+) -> anyhow::Result<Vec<LightSpec>> {
+    let mut lights = args.lights.clone();
+    for at in &args.lights_at {
+        let (theta, phi) = crate::sources::direction_of(sys, frame, at.x, at.y)
+            .with_context(|| format!("--light-at {},{}", at.x, at.y))?;
+        lights.push(at.with_direction(theta, phi).map_err(anyhow::Error::msg)?);
+    }
+    Ok(lights)
+}
+
 /// The output frame: `size` pixels spanning the film's width, the height following the
 /// aspect ratio.
 pub(crate) fn frame_for(sys: &flarebench_sdk::LensSystem, (w, h): (usize, usize)) -> Frame {
@@ -228,6 +294,7 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
     };
     timings.load_ms = ms(t_load);
 
+    let lights = scene_lights(sys, &frame, args)?;
     let t = Instant::now();
     let q = args.quality;
     let opts = PlanOptions {
@@ -238,7 +305,7 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
     let plans = if mode == StarburstMode::Only {
         Vec::new()
     } else {
-        plan::plan(sys, &args.lights, &frame, &opts)?
+        plan::plan(sys, &lights, &frame, &opts)?
     };
     timings.plan_ms = ms(t);
 
@@ -260,7 +327,7 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
 
     let error = if args.reference {
         let t = Instant::now();
-        let reference = reference_image(sys, &aperture, frame, &args.lights)?;
+        let reference = reference_image(sys, &aperture, frame, &lights)?;
         timings.reference_ms = Some(ms(t));
         let c = img.compare(&reference)?;
         Some(ErrorReport {
@@ -283,7 +350,7 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
             settings: starburst_settings,
         };
         let mut cache = StarburstCache::new();
-        add_starbursts(&mut img, sys, &frame, &args.lights, &setup, &mut cache)?
+        add_starbursts(&mut img, sys, &frame, &lights, &setup, &mut cache)?
     };
     timings.starburst_ms = ms(t);
 
