@@ -11,9 +11,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::Context;
 use clap::Args;
-use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::color::LightSpectrum;
 use flarebench_sdk::ghost::GridTrace;
 use flarebench_sdk::ghost::bounds::direct_flux;
@@ -25,7 +23,7 @@ use ghost_raytrace::plan::{self, PlanOptions};
 use ghost_raytrace::scene::{LightSpec, Quality};
 use serde::Serialize;
 
-use super::render::{StarburstArgs, StarburstMode};
+use super::render::{IrisArgs, StarburstArgs, StarburstMode};
 use crate::compose::{StarburstLine, StarburstSetup, add_onto, add_starbursts};
 use crate::input_image::read_input_image;
 use crate::lens_library;
@@ -57,15 +55,8 @@ pub struct ApplyArgs {
     pub film_width_mm: Option<f64>,
     #[arg(long, default_value_t = Quality::Default)]
     pub quality: Quality,
-    /// Iris blade count (0: a circular stop).
-    #[arg(long, default_value_t = 0)]
-    pub iris_blades: u32,
-    /// Iris rotation (degrees).
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
-    pub iris_rotation_deg: f64,
-    /// Blade roundness, 0 (straight) to 1 (a circle).
-    #[arg(long, default_value_t = 0.0)]
-    pub iris_roundness: f64,
+    #[command(flatten)]
+    pub iris: IrisArgs,
     #[command(flatten)]
     pub starburst: StarburstArgs,
     /// Write EXR as 16-bit half floats.
@@ -134,16 +125,7 @@ pub fn run(args: &ApplyArgs, quiet: bool) -> anyhow::Result<()> {
         threshold.is_finite() && threshold > 0.0,
         "--threshold must be positive, got {threshold}"
     );
-    let aperture = if args.iris_blades == 0 {
-        Aperture::Circular
-    } else {
-        Aperture::Iris {
-            blades: args.iris_blades,
-            rotation_rad: args.iris_rotation_deg.to_radians(),
-            roundness: args.iris_roundness,
-        }
-    };
-    aperture.validate().context("iris")?;
+    let aperture = args.iris.aperture()?;
     let (settings, dust) = args.starburst.load()?;
 
     let tables = InterfaceTableSet::for_system(sys, 550.0);

@@ -10,14 +10,13 @@ use clap::Args;
 use flarebench_sdk::abi::author::{Scene, SceneLight};
 use flarebench_sdk::abi::host::LoadedPlugin;
 use flarebench_sdk::abi::params::parse_values;
-use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::ghost::render::Frame;
 use flarebench_sdk::image::HdrImage;
 use ghost_raytrace::reference::reference_image;
 use ghost_raytrace::scene::LightSpec;
 use serde::Serialize;
 
-use super::render::{auto_exposure, parse_size};
+use super::render::{IrisArgs, auto_exposure, parse_size};
 use crate::label;
 use crate::lens_library;
 use crate::output::{ToneMap, ToneOperator, save_image};
@@ -46,15 +45,8 @@ pub struct CompareArgs {
     /// Size of each tile in pixels, WxH (the frame spans the film's width).
     #[arg(long, default_value = "320x180", value_parser = parse_size)]
     pub size: (usize, usize),
-    /// Iris blade count (0: a circular stop).
-    #[arg(long, default_value_t = 0)]
-    pub iris_blades: u32,
-    /// Iris rotation (degrees).
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
-    pub iris_rotation_deg: f64,
-    /// Blade roundness, 0 (straight) to 1 (a circle).
-    #[arg(long, default_value_t = 0.0)]
-    pub iris_roundness: f64,
+    #[command(flatten)]
+    pub iris: IrisArgs,
     /// Also load this plugin library (repeatable).
     #[arg(long = "plugin")]
     pub plugins: Vec<PathBuf>,
@@ -260,16 +252,7 @@ pub fn run(args: &CompareArgs, quiet: bool) -> anyhow::Result<()> {
         film_width_mm: sys.film_width_mm,
         film_height_mm: sys.film_width_mm * h as f64 / w as f64,
     };
-    let aperture = if args.iris_blades == 0 {
-        Aperture::Circular
-    } else {
-        Aperture::Iris {
-            blades: args.iris_blades,
-            rotation_rad: args.iris_rotation_deg.to_radians(),
-            roundness: args.iris_roundness,
-        }
-    };
-    aperture.validate().context("iris")?;
+    let aperture = args.iris.aperture()?;
     let scene = Scene {
         lights: args
             .lights

@@ -46,15 +46,8 @@ pub struct RenderArgs {
     /// Speed against accuracy: fast, default or high (docs/performance.md gives each one's error).
     #[arg(long, default_value_t = Quality::Default)]
     pub quality: Quality,
-    /// Iris blade count (0: a circular stop).
-    #[arg(long, default_value_t = 0)]
-    pub iris_blades: u32,
-    /// Iris rotation (degrees).
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
-    pub iris_rotation_deg: f64,
-    /// Blade roundness, 0 (straight) to 1 (a circle).
-    #[arg(long, default_value_t = 0.0)]
-    pub iris_roundness: f64,
+    #[command(flatten)]
+    pub iris: IrisArgs,
     /// Largest factor by which a large, smooth ghost may be drawn coarser than the output
     /// (a power of two; 1 draws every ghost at full resolution). See docs/performance.md.
     #[arg(long, default_value_t = ghost_raytrace::plan::MAX_DOWNSCALE, value_parser = parse_downscale)]
@@ -136,6 +129,37 @@ impl StarburstArgs {
             None => None,
         };
         Ok((settings, dust))
+    }
+}
+
+/// The iris of the aperture stop, shared by `render`, `apply` and `compare`.
+#[derive(Debug, Args)]
+pub struct IrisArgs {
+    /// Iris blade count (0: a circular stop).
+    #[arg(long, default_value_t = 0)]
+    pub iris_blades: u32,
+    /// Iris rotation (degrees).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub iris_rotation_deg: f64,
+    /// Blade roundness, 0 (straight) to 1 (a circle).
+    #[arg(long, default_value_t = 0.0)]
+    pub iris_roundness: f64,
+}
+
+impl IrisArgs {
+    /// The aperture: a circle without blades, else the iris; checked.
+    pub fn aperture(&self) -> anyhow::Result<Aperture> {
+        let aperture = if self.iris_blades == 0 {
+            Aperture::Circular
+        } else {
+            Aperture::Iris {
+                blades: self.iris_blades,
+                rotation_rad: self.iris_rotation_deg.to_radians(),
+                roundness: self.iris_roundness,
+            }
+        };
+        aperture.validate().context("iris")?;
+        Ok(aperture)
     }
 }
 
@@ -267,16 +291,7 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
     };
     let (starburst_settings, dust) = args.starburst.load()?;
     let frame = frame_for(sys, (w, h));
-    let aperture = if args.iris_blades == 0 {
-        Aperture::Circular
-    } else {
-        Aperture::Iris {
-            blades: args.iris_blades,
-            rotation_rad: args.iris_rotation_deg.to_radians(),
-            roundness: args.iris_roundness,
-        }
-    };
-    aperture.validate().context("iris")?;
+    let aperture = args.iris.aperture()?;
 
     let table = match &args.precomputed {
         Some(p) => {
