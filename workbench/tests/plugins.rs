@@ -152,3 +152,129 @@ fn compare_refuses_an_unknown_plugin_or_parameter_clearly() {
     );
     assert_eq!(out.status.code(), Some(1));
 }
+
+/// The starburst plugin and `compose::add_starbursts` (what `render` adds) run the same sdk
+/// calls in the same order: measured identical images (relative RMSE 0). 1e-6 leaves room for
+/// a change of summation order, not for another landing point (a tenth of a pixel off measures
+/// 1% in `algorithms/starburst-fraunhofer/tests/plugin.rs`).
+const SAME_STARBURST_TOL: f64 = 1e-6;
+
+#[test]
+fn the_starburst_plugin_renders_what_render_composes() {
+    use flarebench::compose::{StarburstSetup, add_starbursts};
+    use flarebench_sdk::abi::author::{Scene, SceneLight};
+    use flarebench_sdk::abi::host;
+    use flarebench_sdk::abi::params::parse_values;
+    use flarebench_sdk::aperture::Aperture;
+    use flarebench_sdk::ghost::render::Frame;
+    use flarebench_sdk::image::HdrImage;
+    use flarebench_sdk::starburst::{StarburstCache, StarburstSettings};
+    use ghost_raytrace::scene::LightSpec;
+
+    let lib = beside_binary("starburst_fraunhofer");
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../lenses/double-gauss-50mm.xml"
+    );
+    let sys = flarebench_sdk::io::read_lens(Path::new(path))
+        .unwrap()
+        .system;
+    let frame = Frame {
+        width: 320,
+        height: 180,
+        film_width_mm: 36.0,
+        film_height_mm: 20.25,
+    };
+    let aperture = Aperture::Iris {
+        blades: 6,
+        rotation_rad: 0.2,
+        roundness: 0.3,
+    };
+    // The third light images off the frame: both paths leave it out.
+    let lights: Vec<LightSpec> = ["10,30", "4,-120,2.5,3200", "30,0"]
+        .iter()
+        .map(|s| LightSpec::parse(s).unwrap())
+        .collect();
+    let settings = StarburstSettings {
+        pupil_texels: 128,
+        padding: 4,
+        wavelengths: 16,
+    };
+    let mut expected = HdrImage::new(frame.width, frame.height);
+    let setup = StarburstSetup {
+        aperture: &aperture,
+        dust: None,
+        settings,
+    };
+    let mut cache = StarburstCache::new();
+    let lines = add_starbursts(&mut expected, &sys, &frame, &lights, &setup, &mut cache).unwrap();
+    let composed = lines.iter().filter(|l| l.left_out.is_none()).count();
+    assert_eq!(composed, 2, "{lines:?}");
+
+    let p = host::load(&lib).unwrap();
+    assert_eq!(p.name, "starburst-fraunhofer");
+    let mut inst = p.instantiate().unwrap();
+    inst.prepare(&sys).unwrap();
+    let scene = Scene {
+        lights: lights
+            .iter()
+            .map(|l| SceneLight {
+                theta_deg: l.theta_deg,
+                phi_deg: l.phi_deg,
+                intensity: l.intensity,
+                spectrum: l.spectrum,
+            })
+            .collect(),
+        frame,
+        aperture,
+    };
+    let values = parse_values(&p.params, "texels=128,padding=4,wavelengths=16").unwrap();
+    let out = inst.render(&scene, &values).unwrap();
+    assert_eq!(out.items_drawn as usize, composed);
+    let c = out.image.compare(&expected).unwrap();
+    assert!(
+        c.relative_rmse < SAME_STARBURST_TOL && c.energy_error.abs() < SAME_STARBURST_TOL,
+        "{c:?}"
+    );
+}
+
+#[test]
+fn the_starburst_plugin_is_listed_and_runs_in_compare() {
+    beside_binary("starburst_fraunhofer");
+    let v = json(&["plugins", "list", "--json"]);
+    let s = v["plugins"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|p| p["name"] == "starburst-fraunhofer")
+        .expect("starburst-fraunhofer is listed");
+    assert_eq!(s["status"], "ok");
+    assert_eq!(s["kind"], "starburst");
+    assert_eq!(s["params"][0]["name"], "texels");
+
+    let dir = temp_dir("compare-starburst");
+    let out_png = dir.join("cmp.png");
+    let v = json(&[
+        "compare",
+        "double-gauss-50mm",
+        "--light",
+        "10,30",
+        "--algo",
+        "starburst-fraunhofer:texels=64,wavelengths=8",
+        "--iris-blades",
+        "6",
+        "--size",
+        "160x90",
+        "--runs",
+        "2",
+        "--no-reference",
+        "--json",
+        "-o",
+        out_png.to_str().unwrap(),
+    ]);
+    let a = &v["algorithms"][0];
+    assert!(a["failure"].is_null(), "{a}");
+    assert_eq!(a["plugin"], "starburst-fraunhofer");
+    assert_eq!(a["items_drawn"], 1);
+    assert!(out_png.is_file());
+}
