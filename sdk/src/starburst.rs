@@ -24,12 +24,16 @@
 
 mod cache;
 mod chief_ray;
+mod lights;
 mod pattern;
 mod power;
 mod splat;
 
 pub use cache::StarburstCache;
 pub use chief_ray::{ChiefRayError, chief_ray_landing};
+pub use lights::{
+    FLUX_LAMBDA_NM, StarburstLens, StarburstLight, StarburstOutcome, StarburstSource,
+};
 pub use pattern::StarburstPattern;
 pub use power::PowerSpectrum;
 pub use splat::{SplatStats, add_starburst};

@@ -1,35 +1,23 @@
 //! Composing a flare: the starburst of every light added to the ghosts' linear HDR image, and
 //! the flare added onto a background image.
 //!
-//! **Starbursts** ([`add_starbursts`]): per light, the chief ray's landing point
-//! (`starburst::chief_ray_landing` at the d line, azimuth turned as the ghosts' meshes are),
-//! the light's flux through the lens — its intensity × the direct image's flux at its angle
-//! (`ghost::bounds::direct_flux` at 550 nm, the same figure the ghosts' energy shares are
-//! relative to) — and the aperture's spectral pattern for the light's spectrum (cached per
-//! aperture and spectrum), added at the working f-number's scale (`docs/starburst.md`). A
-//! light whose pattern cannot reach the frame is left out and reported.
+//! **Starbursts** ([`add_starbursts`]): per light, `flarebench_sdk::starburst::StarburstLens`
+//! (the chief ray's landing point, the light's flux through the lens, the aperture's spectral
+//! pattern at the working f-number's scale — `docs/starburst.md`), the same code the
+//! `starburst-fraunhofer` plugin runs; a light whose pattern cannot reach the frame, or whose
+//! chief ray is lost, is left out and reported.
 //!
 //! **Background** ([`add_onto`]): the flare is added to the background in linear light,
 //! pixel by pixel; where the flare is zero the background's value is kept bit for bit.
 
 use anyhow::{Context, Result, ensure};
 use flarebench_sdk::LensSystem;
-use flarebench_sdk::aperture::{Aperture, ApertureMask};
 use flarebench_sdk::ghost::GridTrace;
-use flarebench_sdk::ghost::bounds::direct_flux;
 use flarebench_sdk::ghost::render::Frame;
 use flarebench_sdk::image::HdrImage;
-use flarebench_sdk::paraxial::analyse;
-use flarebench_sdk::spectrum::LAMBDA_D_NM;
-use flarebench_sdk::starburst::{
-    StarburstCache, StarburstSettings, add_starburst, chief_ray_landing,
-};
-use flarebench_sdk::trace::InterfaceTableSet;
+use flarebench_sdk::starburst::{StarburstCache, StarburstLens, StarburstLight, StarburstSource};
 use ghost_raytrace::scene::LightSpec;
 use serde::Serialize;
-
-/// Wavelength of the direct-flux figure (nm): the ghost planner's (`plan::BOUNDS_LAMBDA_NM`).
-const FLUX_LAMBDA_NM: f64 = 550.0;
 
 /// What happened to one light's starburst.
 #[derive(Clone, Debug, Serialize)]
@@ -50,15 +38,10 @@ pub struct StarburstLine {
 }
 
 /// The aperture and settings starbursts are made with.
-#[derive(Clone, Copy, Debug)]
-pub struct StarburstSetup<'a> {
-    pub aperture: &'a Aperture,
-    /// Optional dust/scratch overlay on the aperture.
-    pub dust: Option<&'a ApertureMask>,
-    pub settings: StarburstSettings,
-}
+pub type StarburstSetup<'a> = StarburstSource<'a>;
 
-/// Adds the starburst of every light to `img` (the frame's size).
+/// Adds the starburst of every light to `img` (the frame's size) —
+/// [`StarburstLens::add`] per light — and reports each.
 pub fn add_starbursts(
     img: &mut HdrImage,
     system: &LensSystem,
@@ -67,52 +50,36 @@ pub fn add_starbursts(
     setup: &StarburstSetup<'_>,
     cache: &mut StarburstCache,
 ) -> Result<Vec<StarburstLine>> {
-    let para = analyse(system, LAMBDA_D_NM).context("paraxial analysis")?;
-    let tables = InterfaceTableSet::for_system(system, FLUX_LAMBDA_NM);
+    let lens = StarburstLens::new(system).context("paraxial analysis")?;
     let mut scratch = GridTrace::default();
     let mut lines = Vec::with_capacity(lights.len());
     for (k, light) in lights.iter().enumerate() {
-        let theta = light.theta_deg.to_radians();
-        let phi = light.phi_deg.to_radians();
-        let flux = light.intensity * direct_flux(system, &tables, theta, &mut scratch);
-        let mut line = StarburstLine {
+        let sl = StarburstLight {
+            theta_deg: light.theta_deg,
+            phi_deg: light.phi_deg,
+            intensity: light.intensity,
+            spectrum: light.spectrum,
+        };
+        let o = lens
+            .add(system, img, frame, &sl, setup, cache, &mut scratch)
+            .context("starburst")?;
+        let position_px = o
+            .centre_mm
+            .map(|c| frame.to_pixel(c[0], c[1]).map(f64::from));
+        let (added, outside, reach_px, left_out) = match (o.drawn, o.centre_mm) {
+            (Some(st), _) => (st.added, st.outside, st.reach_px, None),
+            (None, Some(_)) => (0.0, o.flux, 0.0, Some("off frame".to_string())),
+            (None, None) => (0.0, 0.0, 0.0, Some("chief ray lost".to_string())),
+        };
+        lines.push(StarburstLine {
             light: k,
-            position_px: None,
-            flux,
-            added: 0.0,
-            outside: 0.0,
-            reach_px: 0.0,
-            left_out: None,
-        };
-        let centre = match chief_ray_landing(system, LAMBDA_D_NM, theta, phi) {
-            Ok(c) => c,
-            Err(_) => {
-                line.left_out = Some("chief ray lost".into());
-                lines.push(line);
-                continue;
-            }
-        };
-        let [px, py] = frame.to_pixel(centre[0], centre[1]).map(f64::from);
-        line.position_px = Some([px, py]);
-        // The pattern reaches ±pupil_texels·λ·N/2 (at most 780 nm): skip it when that
-        // cannot touch the frame.
-        let reach_mm = setup.settings.pupil_texels as f64 * 780e-6 * para.f_number / 2.0;
-        let (hw, hh) = (0.5 * frame.film_width_mm, 0.5 * frame.film_height_mm);
-        if centre[0].abs() > hw + reach_mm || centre[1].abs() > hh + reach_mm {
-            line.left_out = Some("off frame".into());
-            line.outside = flux;
-            lines.push(line);
-            continue;
-        }
-        let pattern = cache
-            .pattern(setup.aperture, setup.dust, &setup.settings, light.spectrum)
-            .context("starburst")?;
-        let st = add_starburst(img, frame, &pattern, centre, para.f_number, flux)
-            .context("starburst")?;
-        line.added = st.added;
-        line.outside = st.outside;
-        line.reach_px = st.reach_px;
-        lines.push(line);
+            position_px,
+            flux: o.flux,
+            added,
+            outside,
+            reach_px,
+            left_out,
+        });
     }
     Ok(lines)
 }

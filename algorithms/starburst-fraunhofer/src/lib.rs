@@ -4,12 +4,11 @@
 //! `flarebench render --starburst only` composes (`workbench/src/compose.rs`), behind
 //! [`export_plugin!`](flarebench_sdk::export_plugin).
 //!
-//! Per light: the landing point `starburst::chief_ray_landing` at the d line; the flux
-//! `intensity × ghost::bounds::direct_flux(θ)` at 550 nm (the ghost planner's wavelength, so
-//! the ghosts' energy shares are relative to the same figure); the pattern for the scene's
-//! aperture (circle or iris: blades, rotation and roundness come with the scene) and the
-//! light's spectrum; `starburst::add_starburst` at the lens's working f-number. A light whose
-//! chief ray is lost, or whose pattern cannot reach the frame, draws nothing.
+//! Per light: `sdk::starburst::StarburstLens::add`, the code the workbench's composition runs
+//! too — the chief ray's landing point, the light's flux through the lens, the pattern for
+//! the scene's aperture (circle or iris: blades, rotation and roundness come with the scene)
+//! and the light's spectrum at the lens's working f-number. A light whose chief ray is lost,
+//! or whose pattern cannot reach the frame, draws nothing.
 //!
 //! Parameters: `texels` across the pupil, zero `padding`, `wavelengths` summed
 //! ([`StarburstSettings`]). The instance keeps a [`StarburstCache`] between renders — the
@@ -21,31 +20,18 @@ use flarebench_sdk::abi::author::{
     FlarePlugin, Output, ParamSpec, Params, PluginError, PluginInfo, PluginKind, Scene,
 };
 use flarebench_sdk::ghost::GridTrace;
-use flarebench_sdk::ghost::bounds::direct_flux;
 use flarebench_sdk::image::HdrImage;
-use flarebench_sdk::paraxial::analyse;
-use flarebench_sdk::spectrum::LAMBDA_D_NM;
+pub use flarebench_sdk::starburst::FLUX_LAMBDA_NM;
 use flarebench_sdk::starburst::{
-    StarburstCache, StarburstSettings, add_starburst, chief_ray_landing,
+    StarburstCache, StarburstLens, StarburstLight, StarburstSettings, StarburstSource,
 };
-use flarebench_sdk::trace::InterfaceTableSet;
-
-/// Wavelength of the direct-flux figure (nm): the ghost planner's, as in the workbench's
-/// composition.
-pub const FLUX_LAMBDA_NM: f64 = 550.0;
-
-/// Longest wavelength a pattern is summed over (nm): its reach on the sensor is at most
-/// `texels · 780 nm · N / 2`.
-const LONGEST_NM: f64 = 780.0;
 
 /// What `prepare` keeps of a lens.
 #[derive(Debug)]
 struct Prepared {
     lens: LensSystem,
-    /// Working f-number (paraxial, d line).
-    f_number: f64,
-    /// Interface tables at [`FLUX_LAMBDA_NM`] for the direct flux.
-    tables: InterfaceTableSet,
+    /// Its f-number and direct-flux tables.
+    starburst: StarburstLens,
 }
 
 /// The plugin: the prepared lens and the starburst cache, kept between renders.
@@ -113,11 +99,9 @@ impl FlarePlugin for StarburstFraunhofer {
     }
 
     fn prepare(&mut self, lens: &LensSystem) -> Result<(), PluginError> {
-        let f_number = analyse(lens, LAMBDA_D_NM)?.f_number;
         self.prepared = Some(Prepared {
             lens: lens.clone(),
-            f_number,
-            tables: InterfaceTableSet::for_system(lens, FLUX_LAMBDA_NM),
+            starburst: StarburstLens::new(lens)?,
         });
         Ok(())
     }
@@ -135,26 +119,29 @@ impl FlarePlugin for StarburstFraunhofer {
             .ok_or_else(|| PluginError::new("no lens prepared"))?;
         let frame = &scene.frame;
         let mut img = HdrImage::new(frame.width, frame.height);
-        let reach_mm = settings.pupil_texels as f64 * LONGEST_NM * 1e-6 * p.f_number / 2.0;
-        let (hw, hh) = (0.5 * frame.film_width_mm, 0.5 * frame.film_height_mm);
+        let source = StarburstSource {
+            aperture: &scene.aperture,
+            dust: None,
+            settings,
+        };
         let mut drawn = 0;
         for light in &scene.lights {
-            let theta = light.theta_deg.to_radians();
-            let phi = light.phi_deg.to_radians();
-            // A lost chief ray: the light does not image (the workbench reports it, draws
-            // nothing).
-            let Ok(centre) = chief_ray_landing(&p.lens, LAMBDA_D_NM, theta, phi) else {
-                continue;
+            let light = StarburstLight {
+                theta_deg: light.theta_deg,
+                phi_deg: light.phi_deg,
+                intensity: light.intensity,
+                spectrum: light.spectrum,
             };
-            if centre[0].abs() > hw + reach_mm || centre[1].abs() > hh + reach_mm {
-                continue;
-            }
-            let flux = light.intensity * direct_flux(&p.lens, &p.tables, theta, &mut self.scratch);
-            let pattern = self
-                .cache
-                .pattern(&scene.aperture, None, &settings, light.spectrum)?;
-            add_starburst(&mut img, frame, &pattern, centre, p.f_number, flux)?;
-            drawn += 1;
+            let o = p.starburst.add(
+                &p.lens,
+                &mut img,
+                frame,
+                &light,
+                &source,
+                &mut self.cache,
+                &mut self.scratch,
+            )?;
+            drawn += u32::from(o.drawn.is_some());
         }
         out.add_image(&img)?;
         out.items_drawn = drawn;
