@@ -182,3 +182,29 @@ fn out_of_range_arguments_are_refused() {
     let out = flarebench(&["info", "heliar-tronnier", "--wavelength-nm", "5"]);
     assert!(!out.status.success());
 }
+
+/// Output into a pipe whose reader has gone (`flarebench info … | head -1`) ends the process
+/// quietly instead of panicking on the failed write.
+#[cfg(unix)]
+#[test]
+fn a_closed_pipe_ends_output_quietly() {
+    use std::io::Read;
+    use std::process::{Command, Stdio};
+    let mut child = Command::new(env!("CARGO_BIN_EXE_flarebench"))
+        .args(["info", "nikon-zoom-short"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("binary runs");
+    // Close the reading end before the program writes.
+    drop(child.stdout.take());
+    let mut stderr = String::new();
+    child
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut stderr)
+        .unwrap();
+    child.wait().unwrap();
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
