@@ -33,6 +33,19 @@ pub use mask::{ApertureMask, OLF_DISTANCE_CLIP};
 
 use iris::IrisGeometry;
 
+/// Area of a simple polygon (shoelace formula), in the square of its coordinates' unit;
+/// either winding.
+pub fn polygon_area(poly: &[[f64; 2]]) -> f64 {
+    let n = poly.len();
+    0.5 * (0..n)
+        .map(|i| {
+            let (a, b) = (poly[i], poly[(i + 1) % n]);
+            a[0] * b[1] - a[1] * b[0]
+        })
+        .sum::<f64>()
+        .abs()
+}
+
 /// The shape of the aperture stop's opening, in normalised stop coordinates (module docs).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub enum Aperture {

@@ -80,17 +80,7 @@ pub fn outline(aperture: &Aperture) -> Vec<[f64; 2]> {
     }
 }
 
-/// Area of a polygon (shoelace).
-pub fn polygon_area(poly: &[[f64; 2]]) -> f64 {
-    let n = poly.len();
-    0.5 * (0..n)
-        .map(|i| {
-            let (a, b) = (poly[i], poly[(i + 1) % n]);
-            a[0] * b[1] - a[1] * b[0]
-        })
-        .sum::<f64>()
-        .abs()
-}
+pub use flarebench_sdk::aperture::polygon_area;
 
 /// Every ghost of every light of `scene` as polygons (triangle fans) with their radiance per
 /// pixel², in `bands` wavelength bands; returns the mesh and the number of ghosts drawn (a

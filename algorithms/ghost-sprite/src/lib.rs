@@ -10,7 +10,7 @@ use flarebench_sdk::LensSystem;
 use flarebench_sdk::abi::author::{
     FlarePlugin, Output, ParamSpec, Params, PluginError, PluginInfo, PluginKind, Scene,
 };
-use flarebench_sdk::aperture::Aperture;
+use flarebench_sdk::aperture::{Aperture, polygon_area};
 use flarebench_sdk::image::HdrImage;
 use flarebench_sdk::paraxial::analyse;
 use flarebench_sdk::raster::rasterize;
@@ -120,18 +120,6 @@ fn shape(aperture: &Aperture) -> Vec<[f64; 2]> {
         .collect()
 }
 
-/// Area of a polygon (shoelace).
-fn area(poly: &[[f64; 2]]) -> f64 {
-    let n = poly.len();
-    0.5 * (0..n)
-        .map(|i| {
-            let (a, b) = (poly[i], poly[(i + 1) % n]);
-            a[0] * b[1] - a[1] * b[0]
-        })
-        .sum::<f64>()
-        .abs()
-}
-
 /// Draws the sprites of every light into `img`; returns how many were drawn.
 pub fn draw(
     efl_mm: f64,
@@ -143,7 +131,7 @@ pub fn draw(
 ) -> u32 {
     let frame = scene.frame;
     let unit = shape(&scene.aperture);
-    let unit_area = area(&unit);
+    let unit_area = polygon_area(&unit);
     let centre = [frame.width as f64 / 2.0, frame.height as f64 / 2.0];
     let mut positions = Vec::new();
     let mut attrs = Vec::new();
