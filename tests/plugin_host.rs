@@ -190,6 +190,25 @@ fn nan_or_infinite_pixels_are_an_error_naming_the_first() {
 }
 
 #[test]
+fn render_into_resizes_and_clears_the_callers_buffer() {
+    let p = faulty();
+    let mut inst = p.instantiate().unwrap();
+    inst.prepare(&load_lens("heliar-tronnier")).unwrap();
+    let v = values(&p, "level=0.25");
+    let small = scene(8, 6, 36.0, 1.0, 0.0);
+    let fresh = inst.render(&small, &v).unwrap().image;
+    // A dirty buffer of another size, as left by an earlier frame.
+    let mut buffer = flarebench_sdk::image::HdrImage::new(20, 20);
+    buffer.pixels.iter_mut().for_each(|p| *p = [7.0; 3]);
+    let stats = inst.render_into(&small, &v, &mut buffer).unwrap();
+    assert_eq!(buffer, fresh);
+    assert_eq!(stats.mesh_triangles, 0);
+    // And again into the same buffer: the same image, not twice the light.
+    inst.render_into(&small, &v, &mut buffer).unwrap();
+    assert_eq!(buffer, fresh);
+}
+
+#[test]
 fn a_mesh_indexing_past_its_vertices_is_an_error() {
     let p = faulty();
     let mut inst = p.instantiate().unwrap();

@@ -278,3 +278,72 @@ fn the_starburst_plugin_is_listed_and_runs_in_compare() {
     assert_eq!(a["items_drawn"], 1);
     assert!(out_png.is_file());
 }
+
+/// The ghost plugin renders straight into the host's buffer; through the boundary, into a
+/// reused dirty buffer, it gives the image the library gives directly (rayon's reduction order
+/// may differ between runs, hence a tolerance rather than equality).
+#[test]
+fn the_ghost_plugin_renders_what_the_library_renders() {
+    use flarebench_sdk::abi::author::{Scene, SceneLight};
+    use flarebench_sdk::abi::host;
+    use flarebench_sdk::abi::params::parse_values;
+    use flarebench_sdk::aperture::Aperture;
+    use flarebench_sdk::ghost::render::Frame;
+    use flarebench_sdk::image::HdrImage;
+    use ghost_raytrace::plan::{self, PlanOptions};
+    use ghost_raytrace::scene::{LightSpec, Quality};
+
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../lenses/heliar-tronnier.xml");
+    let sys = flarebench_sdk::io::read_lens(Path::new(path))
+        .unwrap()
+        .system;
+    let frame = Frame {
+        width: 240,
+        height: 135,
+        film_width_mm: sys.film_width_mm,
+        film_height_mm: sys.film_width_mm * 135.0 / 240.0,
+    };
+    let aperture = Aperture::Iris {
+        blades: 5,
+        rotation_rad: 0.3,
+        roundness: 0.2,
+    };
+    let lights: Vec<LightSpec> = ["10,30", "4,-120,2.5,3200"]
+        .iter()
+        .map(|s| LightSpec::parse(s).unwrap())
+        .collect();
+    let opts = PlanOptions::for_quality(Quality::Fast, None);
+    let plans = plan::plan(&sys, &lights, &frame, &opts).unwrap();
+    let (expected, _) = ghost_raytrace::ghosts::render(&sys, &aperture, frame, &plans).unwrap();
+    assert!(expected.sum()[1] > 0.0);
+
+    let p = host::load(&beside_binary("ghost_raytrace")).unwrap();
+    let mut inst = p.instantiate().unwrap();
+    inst.prepare(&sys).unwrap();
+    let scene = Scene {
+        lights: lights
+            .iter()
+            .map(|l| SceneLight {
+                theta_deg: l.theta_deg,
+                phi_deg: l.phi_deg,
+                intensity: l.intensity,
+                spectrum: l.spectrum,
+            })
+            .collect(),
+        frame,
+        aperture,
+    };
+    let values = parse_values(&p.params, "quality=fast").unwrap();
+    let mut buffer = HdrImage::new(7, 3);
+    buffer.pixels.iter_mut().for_each(|p| *p = [1e3; 3]);
+    for _ in 0..2 {
+        let stats = inst.render_into(&scene, &values, &mut buffer).unwrap();
+        let drawn: usize = plans.iter().map(|p| p.ghosts.len()).sum();
+        assert_eq!(stats.items_drawn as usize, drawn);
+        let c = buffer.compare(&expected).unwrap();
+        assert!(
+            c.relative_rmse < 1e-5 && c.energy_error.abs() < 1e-5,
+            "{c:?}"
+        );
+    }
+}

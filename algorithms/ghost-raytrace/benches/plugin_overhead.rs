@@ -1,8 +1,8 @@
 //! The plugin boundary's cost: one render of the Heliar (light at 8°, 640×360, quality fast)
 //! called directly (`plan::plan` + `ghosts::render`, as `flarebench render` does) against the
-//! same render through the loaded plugin library (`host::load` → `PluginInstance::render`:
-//! scene conversion, the host's image, the thunk's checks, the copy into the host's buffer and
-//! the NaN scan). Needs the release library first:
+//! same render through the loaded plugin library (`host::load` →
+//! `PluginInstance::render_into`: scene conversion, clearing the host's reused buffer, the
+//! thunk's checks, the plugin rendering straight into that buffer, the NaN scan). Needs the release library first:
 //!
 //! ```sh
 //! cargo build --release -p flarebench-ghost-raytrace -p flarebench-test-plugin-faulty
@@ -18,6 +18,7 @@ use flarebench_sdk::abi::host;
 use flarebench_sdk::abi::params::parse_values;
 use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::ghost::render::Frame;
+use flarebench_sdk::image::HdrImage;
 use flarebench_sdk::io::read_lens;
 use ghost_raytrace::ghosts;
 use ghost_raytrace::plan::{self, PlanOptions};
@@ -74,8 +75,10 @@ fn bench(c: &mut Criterion) {
             img
         })
     });
+    // A host rendering frame after frame keeps its buffer (`render_into`).
+    let mut buffer = HdrImage::new(0, 0);
     g.bench_function("plugin", |b| {
-        b.iter(|| inst.render(&scene, &values).unwrap())
+        b.iter(|| inst.render_into(&scene, &values, &mut buffer).unwrap())
     });
     g.finish();
 
@@ -103,8 +106,9 @@ fn bench(c: &mut Criterion) {
                     film_width_mm: sys.film_width_mm,
                     film_height_mm: sys.film_width_mm * h as f64 / w as f64,
                 };
+                let mut buffer = HdrImage::new(0, 0);
                 c.bench_function(&format!("boundary_only_{w}x{h}"), |b| {
-                    b.iter(|| inst.render(&s, &values).unwrap())
+                    b.iter(|| inst.render_into(&s, &values, &mut buffer).unwrap())
                 });
             }
         }
@@ -154,6 +158,7 @@ fn paired(
     let mut direct = Vec::with_capacity(pairs);
     let mut through = Vec::with_capacity(pairs);
     let mut ratios = Vec::with_capacity(pairs);
+    let mut buffer = HdrImage::new(0, 0);
     let run_direct = || {
         let t = Instant::now();
         let opts = PlanOptions::for_quality(quality, None);
@@ -165,8 +170,8 @@ fn paired(
     for i in 0..pairs {
         let mut run_plugin = || {
             let t = Instant::now();
-            let out = inst.render(&scene, &values).unwrap();
-            std::hint::black_box(out);
+            let out = inst.render_into(&scene, &values, &mut buffer).unwrap();
+            std::hint::black_box((out, &buffer));
             t.elapsed().as_secs_f64()
         };
         // Alternate which goes first.

@@ -12,6 +12,12 @@ pub enum GhostRenderError {
     Paraxial(#[from] ParaxialError),
     #[error("the light at {theta_deg}° is outside the precomputed table (0–{max_deg}°)")]
     OutsideTable { theta_deg: f64, max_deg: f64 },
+    #[error("the output buffer holds {len} pixels, not the frame's {width}×{height}")]
+    OutputSize {
+        width: usize,
+        height: usize,
+        len: usize,
+    },
 }
 
 /// Why a `--light` specification was refused.

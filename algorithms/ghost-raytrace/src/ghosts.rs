@@ -13,7 +13,7 @@ use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::ghost::render::{
     BandRef, Frame, GhostContext, GhostLight, GhostScratch, GhostStats, render_ghost,
 };
-use flarebench_sdk::image::{CoarseGrid, HdrImage, add_upsampled};
+use flarebench_sdk::image::{CoarseGrid, HdrImage, add_upsampled_into};
 use flarebench_sdk::paraxial::{analyse, stop_opening};
 use flarebench_sdk::spectrum::LAMBDA_D_NM;
 use rayon::prelude::*;
@@ -47,6 +47,28 @@ pub fn render_with(
     plans: &[LightPlan],
     options: RenderOptions,
 ) -> Result<(HdrImage, Vec<Vec<GhostStats>>), GhostRenderError> {
+    let mut img = HdrImage::new(frame.width, frame.height);
+    let stats = render_into(system, aperture, frame, plans, options, &mut img.pixels)?;
+    Ok((img, stats))
+}
+
+/// [`render_with`] adding into `out`, a row-major buffer of `frame`'s size (a plugin host's
+/// buffer, say), so that no image of the frame's size is allocated for the result.
+pub fn render_into(
+    system: &LensSystem,
+    aperture: &Aperture,
+    frame: Frame,
+    plans: &[LightPlan],
+    options: RenderOptions,
+    out: &mut [[f32; 3]],
+) -> Result<Vec<Vec<GhostStats>>, GhostRenderError> {
+    if out.len() != frame.width * frame.height {
+        return Err(GhostRenderError::OutputSize {
+            width: frame.width,
+            height: frame.height,
+            len: out.len(),
+        });
+    }
     let p = analyse(system, LAMBDA_D_NM)?;
     let mut jobs: Vec<(usize, usize, usize)> = plans
         .iter()
@@ -59,7 +81,6 @@ pub fn render_with(
         })
         .collect();
     jobs.sort_unstable();
-    let mut img = HdrImage::new(frame.width, frame.height);
     let mut stats = Vec::with_capacity(jobs.len());
     for group in jobs.chunk_by(|a, b| a.0 == b.0) {
         let grid = CoarseGrid::for_frame(frame.width, frame.height, group[0].0);
@@ -72,7 +93,7 @@ pub fn render_with(
             trace_f64: options.trace_f64,
         };
         let coarse = render_group(&ctx, plans, group, &mut stats);
-        add_upsampled(&mut img, &coarse, &grid);
+        add_upsampled_into(out, frame.width, &coarse, &grid);
     }
     stats.sort_by_key(|&(l, g, _)| (l, g));
     let mut per_light: Vec<Vec<GhostStats>> = plans
@@ -82,7 +103,7 @@ pub fn render_with(
     for (l, g, s) in stats {
         per_light[l][g] = s;
     }
-    Ok((img, per_light))
+    Ok(per_light)
 }
 
 /// Draws the ghosts `group` (`(factor, light, ghost)`) into one image of `ctx.frame`'s size,

@@ -102,8 +102,15 @@ impl FlarePlugin for GhostRaytrace {
             .ok_or_else(|| PluginError::new("no lens prepared"))?;
         let opts = plan_options(params)?;
         let plans = plan::plan(lens, &light_specs(scene), &scene.frame, &opts)?;
-        let (img, _) = ghosts::render(lens, &scene.aperture, scene.frame, &plans)?;
-        out.add_image(&img)?;
+        // Straight into the host's buffer: no image of the frame's size, no copy.
+        ghosts::render_into(
+            lens,
+            &scene.aperture,
+            scene.frame,
+            &plans,
+            ghosts::RenderOptions::default(),
+            out.pixels,
+        )?;
         out.items_drawn = plans.iter().map(|p| p.ghosts.len() as u32).sum();
         Ok(())
     }

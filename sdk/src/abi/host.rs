@@ -22,6 +22,7 @@ use crate::color::LightSpectrum;
 use crate::image::HdrImage;
 use crate::io::write_xml;
 use crate::raster::rasterize;
+use rayon::prelude::*;
 
 use super::author::{PluginKind, Scene};
 use super::export::read_str;
@@ -412,6 +413,15 @@ pub struct RenderResult {
     pub mesh_triangles: usize,
 }
 
+/// What a render reported besides its image (see [`PluginInstance::render_into`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RenderStats {
+    /// Items the plugin reports drawn (ghosts, sprites, spikes).
+    pub items_drawn: u32,
+    /// Triangles of the plugin's mesh.
+    pub mesh_triangles: usize,
+}
+
 /// A live plugin instance, destroyed (by the plugin) when dropped.
 #[derive(Debug)]
 pub struct PluginInstance<'p> {
@@ -525,6 +535,27 @@ impl PluginInstance<'_> {
         scene: &Scene,
         values: &[f64],
     ) -> Result<RenderResult, PluginCallError> {
+        let mut image = HdrImage::new(0, 0);
+        let RenderStats {
+            items_drawn,
+            mesh_triangles,
+        } = self.render_into(scene, values, &mut image)?;
+        Ok(RenderResult {
+            image,
+            items_drawn,
+            mesh_triangles,
+        })
+    }
+
+    /// [`PluginInstance::render`] into `image`, which is resized to the scene's frame and
+    /// cleared first: a caller rendering frame after frame keeps one buffer (no fresh pages
+    /// to fault in). On an error `image` holds no meaningful picture.
+    pub fn render_into(
+        &mut self,
+        scene: &Scene,
+        values: &[f64],
+        image: &mut HdrImage,
+    ) -> Result<RenderStats, PluginCallError> {
         self.usable()?;
         let name = || self.plugin.name.clone();
         let aperture = match &scene.aperture {
@@ -594,7 +625,10 @@ impl PluginInstance<'_> {
             aperture,
         };
         loop {
-            let mut image = HdrImage::new(f.width, f.height);
+            image.width = f.width;
+            image.height = f.height;
+            image.pixels.clear();
+            image.pixels.resize(f.width * f.height, [0.0; 3]);
             let (vcap, tcap) = self.mesh_capacity;
             let mut vertices = vec![
                 MeshVertex {
@@ -667,7 +701,7 @@ impl PluginInstance<'_> {
                     reason: format!("counts {nv}/{nt} exceed the capacities {vcap}/{tcap}"),
                 });
             }
-            check_finite(&image).map_err(|(count, x, y)| PluginCallError::NonFinite {
+            check_finite(image).map_err(|(count, x, y)| PluginCallError::NonFinite {
                 plugin: name(),
                 count,
                 x,
@@ -694,10 +728,9 @@ impl PluginInstance<'_> {
                 }
                 let positions: Vec<[f32; 2]> = vs.iter().map(|v| [v.x, v.y]).collect();
                 let attrs: Vec<[f32; 3]> = vs.iter().map(|v| v.rgb).collect();
-                rasterize(&mut image, &positions, &attrs, ts, |&c| c);
+                rasterize(image, &positions, &attrs, ts, |&c| c);
             }
-            return Ok(RenderResult {
-                image,
+            return Ok(RenderStats {
                 items_drawn: output.items_drawn,
                 mesh_triangles: nt,
             });
@@ -707,6 +740,29 @@ impl PluginInstance<'_> {
 
 /// Count of non-finite values and the first offending pixel.
 fn check_finite(img: &HdrImage) -> Result<(), (usize, usize, usize)> {
+    // Fast pass: `x · 0` is 0 for finite x and NaN otherwise, so a chunk's sum of them is
+    // NaN exactly when the chunk holds a non-finite value. It vectorises, and chunks run on
+    // all cores; only an image that fails it is scanned value by value.
+    fn chunk_finite(chunk: &[f32]) -> bool {
+        // Sixteen independent sums, so that the loop vectorises.
+        let mut acc = [0.0_f32; 16];
+        let mut lanes = chunk.chunks_exact(16);
+        for l in &mut lanes {
+            for (a, &x) in acc.iter_mut().zip(l) {
+                *a += x * 0.0;
+            }
+        }
+        let rest = lanes.remainder().iter().fold(0.0, |a, &x| a + x * 0.0);
+        acc.iter().sum::<f32>() + rest == 0.0
+    }
+    let all_finite = img
+        .pixels
+        .as_flattened()
+        .par_chunks(1 << 15)
+        .all(chunk_finite);
+    if all_finite {
+        return Ok(());
+    }
     let mut count = 0;
     let mut first = None;
     for (i, p) in img.pixels.iter().enumerate() {
@@ -727,5 +783,38 @@ impl Drop for PluginInstance<'_> {
         // SAFETY: `ptr` came from this plugin's `create` and is destroyed once, here; the
         // plugin's destroy catches panics in its drop.
         unsafe { (self.plugin.functions.destroy)(self.ptr) };
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_finite_check_finds_every_kind_of_bad_value_anywhere() {
+        // Big enough for several parallel chunks and a remainder past the 16-lane loop.
+        let (w, h) = (301, 257);
+        let mut img = HdrImage::new(w, h);
+        for (k, p) in img.pixels.iter_mut().enumerate() {
+            *p = [f32::MAX, -f32::MAX, k as f32 * 1e-3];
+        }
+        assert_eq!(check_finite(&img), Ok(()));
+        for (k, bad) in [
+            (0, f32::NAN),
+            (w * h - 1, f32::INFINITY),
+            (w * 100 + 7, f32::NEG_INFINITY),
+        ] {
+            let mut img = img.clone();
+            img.pixels[k][2] = bad;
+            assert_eq!(
+                check_finite(&img),
+                Err((1, k % w, k / w)),
+                "value {bad} at {k}"
+            );
+        }
+        let mut img = img.clone();
+        img.pixels[5][0] = f32::NAN;
+        img.pixels[9][1] = f32::NAN;
+        assert_eq!(check_finite(&img), Err((2, 5, 0)));
     }
 }

@@ -71,45 +71,62 @@ fn axis_weights(
 /// # Panics
 /// If `coarse` is not `grid.width × grid.height`.
 pub fn add_upsampled(dst: &mut HdrImage, coarse: &HdrImage, grid: &CoarseGrid) {
+    add_upsampled_into(&mut dst.pixels, dst.width, coarse, grid);
+}
+
+/// [`add_upsampled`] into a row-major pixel buffer `width` pixels wide (a host's buffer, say),
+/// whose height is `dst.len() / width`.
+///
+/// # Panics
+/// If `coarse` is not `grid.width × grid.height`, or `dst.len()` is not a multiple of `width`.
+pub fn add_upsampled_into(
+    dst: &mut [[f32; 3]],
+    width: usize,
+    coarse: &HdrImage,
+    grid: &CoarseGrid,
+) {
     assert_eq!(
         (coarse.width, coarse.height),
         (grid.width, grid.height),
         "the coarse image has the grid's size"
     );
-    if dst.width == 0 || dst.height == 0 || grid.width == 0 || grid.height == 0 {
+    if width == 0 || dst.is_empty() || grid.width == 0 || grid.height == 0 {
         return;
     }
-    if grid.factor == 1 && grid.width == dst.width && grid.height == dst.height {
-        dst.add_image(coarse).expect("sizes checked");
+    assert_eq!(dst.len() % width, 0, "whole rows");
+    let height = dst.len() / width;
+    if grid.factor == 1 && grid.width == width && grid.height == height {
+        for (o, p) in dst.iter_mut().zip(&coarse.pixels) {
+            for c in 0..3 {
+                o[c] += p[c];
+            }
+        }
         return;
     }
     let norm = 1.0 / (grid.factor * grid.factor) as f32;
-    let xs = axis_weights(dst.width, grid.width, grid.factor, grid.offset[0]);
-    let ys = axis_weights(dst.height, grid.height, grid.factor, grid.offset[1]);
+    let xs = axis_weights(width, grid.width, grid.factor, grid.offset[0]);
+    let ys = axis_weights(height, grid.height, grid.factor, grid.offset[1]);
     let cw = grid.width;
-    dst.pixels
-        .par_chunks_mut(dst.width)
-        .zip(ys.par_iter())
-        .for_each_init(
-            || vec![[0.0_f32; 3]; cw],
-            |blend, (row, &(j0, j1, ty))| {
-                let (r0, r1) = (
-                    &coarse.pixels[j0 * cw..(j0 + 1) * cw],
-                    &coarse.pixels[j1 * cw..(j1 + 1) * cw],
-                );
-                for ((b, a0), a1) in blend.iter_mut().zip(r0).zip(r1) {
-                    for c in 0..3 {
-                        b[c] = norm * (a0[c] + ty * (a1[c] - a0[c]));
-                    }
+    dst.par_chunks_mut(width).zip(ys.par_iter()).for_each_init(
+        || vec![[0.0_f32; 3]; cw],
+        |blend, (row, &(j0, j1, ty))| {
+            let (r0, r1) = (
+                &coarse.pixels[j0 * cw..(j0 + 1) * cw],
+                &coarse.pixels[j1 * cw..(j1 + 1) * cw],
+            );
+            for ((b, a0), a1) in blend.iter_mut().zip(r0).zip(r1) {
+                for c in 0..3 {
+                    b[c] = norm * (a0[c] + ty * (a1[c] - a0[c]));
                 }
-                for (p, &(i0, i1, tx)) in row.iter_mut().zip(&xs) {
-                    let (a, b) = (blend[i0], blend[i1]);
-                    for c in 0..3 {
-                        p[c] += a[c] + tx * (b[c] - a[c]);
-                    }
+            }
+            for (p, &(i0, i1, tx)) in row.iter_mut().zip(&xs) {
+                let (a, b) = (blend[i0], blend[i1]);
+                for c in 0..3 {
+                    p[c] += a[c] + tx * (b[c] - a[c]);
                 }
-            },
-        );
+            }
+        },
+    );
 }
 
 #[cfg(test)]
