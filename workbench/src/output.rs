@@ -125,13 +125,28 @@ pub fn save_image_as(
 /// The image as an OpenEXR file in memory: one layer, channels R, G, B as f32, ZIP
 /// compression in blocks of 16 scan lines (lossless).
 pub fn encode_exr(img: &HdrImage) -> Result<Vec<u8>> {
+    encode_exr_with(img, &[])
+}
+
+/// [`encode_exr`] with text attributes `(name, value)` on the layer (as
+/// [`read_exr_with_attributes`] gives them back).
+pub fn encode_exr_with(img: &HdrImage, text: &[(&str, &str)]) -> Result<Vec<u8>> {
     use exr::prelude::*;
     check_size(img)?;
     let width = img.width;
     let pixels = &img.pixels;
+    let mut attributes = LayerAttributes::named("flarebench");
+    for &(name, value) in text {
+        attributes.other.insert(
+            Text::new_or_none(name).context("attribute name is not EXR text")?,
+            AttributeValue::Text(
+                Text::new_or_none(value).context("attribute value is not EXR text")?,
+            ),
+        );
+    }
     let layer = Layer::new(
         (img.width, img.height),
-        LayerAttributes::named("flarebench"),
+        attributes,
         Encoding::SMALL_LOSSLESS,
         SpecificChannels::rgb(|pos: Vec2<usize>| {
             let p = pixels[pos.y() * width + pos.x()];
@@ -192,6 +207,13 @@ pub fn encode_png(img: &HdrImage, tone: &ToneMap) -> Result<Vec<u8>> {
 /// Reads the first RGB(A) layer of an OpenEXR file as a linear image (alpha ignored; f16 and
 /// u32 channels are converted to f32).
 pub fn read_exr(path: &Path) -> Result<HdrImage> {
+    Ok(read_exr_with_attributes(path)?.0)
+}
+
+/// [`read_exr`] and the first layer's text attributes (name → value).
+pub fn read_exr_with_attributes(
+    path: &Path,
+) -> Result<(HdrImage, std::collections::BTreeMap<String, String>)> {
     let image = exr::prelude::read_first_rgba_layer_from_file(
         path,
         |size, _| HdrImage::new(size.width(), size.height()),
@@ -202,7 +224,17 @@ pub fn read_exr(path: &Path) -> Result<HdrImage> {
     )
     .map_err(|e| anyhow::anyhow!("{e}"))
     .with_context(|| format!("could not read OpenEXR image `{}`", path.display()))?;
-    Ok(image.layer_data.channel_data.pixels)
+    let text = image
+        .layer_data
+        .attributes
+        .other
+        .iter()
+        .filter_map(|(k, v)| match v {
+            exr::meta::attribute::AttributeValue::Text(t) => Some((k.to_string(), t.to_string())),
+            _ => None,
+        })
+        .collect();
+    Ok((image.layer_data.channel_data.pixels, text))
 }
 
 fn check_size(img: &HdrImage) -> Result<()> {

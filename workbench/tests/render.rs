@@ -53,19 +53,36 @@ fn render_writes_an_image_and_reports_what_it_did() {
 
 #[test]
 fn reference_error_is_reported_and_small() {
-    let out = temp_dir("render").join("ref.png");
-    let v = json(&[
-        "render",
-        "heliar-tronnier",
-        "--light",
-        "5,0",
-        "--size",
-        "160x90",
-        "-o",
-        out.to_str().unwrap(),
-        "--reference",
-        "--json",
-    ]);
+    let dir = temp_dir("render-ref");
+    let out = dir.join("ref.png");
+    let saved = dir.join("reference.exr");
+    let _ = std::fs::remove_file(&saved);
+    let (out, saved_s) = (out.to_str().unwrap(), saved.to_str().unwrap());
+    let args = |light| {
+        [
+            "render",
+            "heliar-tronnier",
+            "--light",
+            light,
+            "--size",
+            "160x90",
+            "-o",
+            out,
+            "--reference-file",
+            saved_s,
+            "--json",
+        ]
+    };
+    let v = json(&args("5,0"));
+    assert!(saved.is_file(), "the reference was saved");
+    // The second run reads the saved reference: the same figures.
+    let again = json(&args("5,0"));
+    assert_eq!(v["error"], again["error"]);
+    // Another scene refuses the file rather than comparing against the wrong picture.
+    let o = flarebench(&args("5,10"));
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("reference of another scene"), "{err}");
     let e = &v["error"];
     let rmse = e["relative_rmse"].as_f64().unwrap();
     let energy = e["energy_error"].as_f64().unwrap();

@@ -10,6 +10,7 @@
 use flarebench_sdk::LensSystem;
 use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::ghost::render::Frame;
+use flarebench_sdk::ghost::table::fingerprint;
 use flarebench_sdk::image::HdrImage;
 
 use crate::GhostRenderError;
@@ -23,6 +24,58 @@ pub const REFERENCE_BANDS: usize = 31;
 pub const REFERENCE_MIN_GRID: usize = 240;
 /// Grid multiplier of the reference renderer over the planned grid.
 pub const REFERENCE_GRID_SCALE: f64 = 10.0;
+
+/// Bumped whenever the reference renderer's output changes, so that saved references made by
+/// an older one are refused ([`reference_key`]).
+pub const REFERENCE_VERSION: u32 = 1;
+
+/// A text naming everything the reference image depends on: the renderer's version and
+/// settings, the lens (fingerprint of its canonical XML), the aperture, the frame and every
+/// light. Two scenes with the same key have the same reference; the workbench stores it with
+/// a saved reference (`render --reference-file`) and refuses a file whose key differs.
+pub fn reference_key(
+    system: &LensSystem,
+    aperture: &Aperture,
+    frame: &Frame,
+    lights: &[LightSpec],
+) -> String {
+    use std::fmt::Write;
+    let mut key = format!(
+        "flarebench-reference v{REFERENCE_VERSION} bands {REFERENCE_BANDS} grid x{REFERENCE_GRID_SCALE} min {REFERENCE_MIN_GRID}; lens {} {}; aperture {}; frame {}x{} px {}x{} mm",
+        system.name,
+        fingerprint(system),
+        aperture_key(aperture),
+        frame.width,
+        frame.height,
+        frame.film_width_mm,
+        frame.film_height_mm,
+    );
+    for l in lights {
+        let _ = write!(
+            key,
+            "; light {},{},{} {:?}",
+            l.theta_deg, l.phi_deg, l.intensity, l.spectrum
+        );
+    }
+    key
+}
+
+/// The aperture in a reference key; a mask by a fingerprint of its pixels.
+fn aperture_key(aperture: &Aperture) -> String {
+    match aperture {
+        Aperture::Mask(mask) => {
+            let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+            for v in mask.data() {
+                for b in v.to_le_bytes() {
+                    h ^= u64::from(b);
+                    h = h.wrapping_mul(0x0100_0000_01b3);
+                }
+            }
+            format!("mask {}x{} {h:016x}", mask.width(), mask.height())
+        }
+        other => format!("{other:?}"),
+    }
+}
 
 /// Renders the reference image of `lights` through `system`.
 pub fn reference_image(

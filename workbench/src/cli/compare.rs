@@ -12,7 +12,6 @@ use flarebench_sdk::abi::host::LoadedPlugin;
 use flarebench_sdk::abi::params::parse_values;
 use flarebench_sdk::ghost::render::Frame;
 use flarebench_sdk::image::HdrImage;
-use ghost_raytrace::reference::reference_image;
 use ghost_raytrace::scene::LightSpec;
 use serde::Serialize;
 
@@ -21,6 +20,7 @@ use crate::label;
 use crate::lens_library;
 use crate::output::{ToneMap, ToneOperator, save_image};
 use crate::plugin_dirs;
+use crate::reference_file::{ReferenceSource, reference_for};
 use crate::report::ErrorReport;
 use crate::table::Table;
 
@@ -50,6 +50,10 @@ pub struct CompareArgs {
     /// Also load this plugin library (repeatable).
     #[arg(long = "plugin")]
     pub plugins: Vec<PathBuf>,
+    /// Keep the reference in this OpenEXR file: read it when it holds this scene's reference,
+    /// else render it and write it there (as `render --reference-file`).
+    #[arg(long, value_name = "FILE", conflicts_with = "no_reference")]
+    pub reference_file: Option<PathBuf>,
     /// Skip the reference renderer (no error figures, no difference image).
     #[arg(long)]
     pub no_reference: bool,
@@ -271,11 +275,15 @@ pub fn run(args: &CompareArgs, quiet: bool) -> anyhow::Result<()> {
     let (reference, reference_ms) = if args.no_reference {
         (None, None)
     } else {
-        if !quiet && !args.json {
+        let file = args.reference_file.as_deref();
+        if !quiet && !args.json && !file.is_some_and(|f| f.exists()) {
             eprintln!("rendering the reference …");
         }
         let t = Instant::now();
-        let img = reference_image(sys, &aperture, frame, &args.lights)?;
+        let (img, source) = reference_for(sys, &aperture, frame, &args.lights, file)?;
+        if !quiet && !args.json && source != ReferenceSource::Rendered {
+            eprintln!("reference {source}");
+        }
         (Some(img), Some(ms(t)))
     };
 

@@ -11,7 +11,6 @@ use flarebench_sdk::ghost::render::Frame;
 use flarebench_sdk::starburst::{StarburstCache, StarburstSettings};
 
 use ghost_raytrace::plan::PlanOptions;
-use ghost_raytrace::reference::reference_image;
 use ghost_raytrace::scene::{LightSpec, Quality};
 use ghost_raytrace::{ghosts, plan};
 
@@ -20,6 +19,7 @@ use crate::compose::{StarburstSetup, add_onto, add_starbursts};
 use crate::input_image::read_input_image;
 use crate::lens_library;
 use crate::output::{ExrPrecision, ToneMap, ToneOperator, save_image_as};
+use crate::reference_file::{ReferenceSource, reference_for};
 use crate::report::{ErrorReport, LightReport, RenderReport, Timings};
 use flarebench_sdk::ghost::table::BoundsTable;
 
@@ -72,6 +72,10 @@ pub struct RenderArgs {
     /// Also render the dense reference and report the error against it.
     #[arg(long)]
     pub reference: bool,
+    /// Keep the reference in this OpenEXR file (implies --reference): read it when it holds
+    /// this scene's reference, else render it and write it there.
+    #[arg(long, value_name = "FILE")]
+    pub reference_file: Option<PathBuf>,
     /// Output image: .exr (linear, float) or .png (tone mapped).
     #[arg(short, long)]
     pub output: PathBuf,
@@ -340,10 +344,19 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
         "internal error: the image has non-finite pixels"
     );
 
-    let error = if args.reference {
+    let error = if args.reference || args.reference_file.is_some() {
         let t = Instant::now();
-        let reference = reference_image(sys, &aperture, frame, &lights)?;
+        let (reference, source) = reference_for(
+            sys,
+            &aperture,
+            frame,
+            &lights,
+            args.reference_file.as_deref(),
+        )?;
         timings.reference_ms = Some(ms(t));
+        if !quiet && !args.json && source != ReferenceSource::Rendered {
+            eprintln!("reference {source}");
+        }
         let c = img.compare(&reference)?;
         Some(ErrorReport {
             relative_rmse: c.relative_rmse,
