@@ -19,4 +19,4 @@ pub mod srgb;
 mod tables;
 
 pub use light::{LightSpectrum, LightSpectrumError, planck_radiance};
-pub use sampling::{SpectralSampling, SpectralSamplingError};
+pub use sampling::{SAMPLING_MAX_NM, SAMPLING_MIN_NM, SpectralSampling, SpectralSamplingError};

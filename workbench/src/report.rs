@@ -117,7 +117,7 @@ impl LightReport {
             ghosts_dropped: lp.dropped.len(),
             ghost_energy_share: total,
             dropped_energy_fraction: if total > 0.0 { dropped / total } else { 0.0 },
-            bands: lp.bands.len(),
+            bands: lp.sampled,
             ghosts,
             dropped: lp
                 .dropped

@@ -25,6 +25,7 @@ fn alone(lp: &LightPlan, g: usize) -> Vec<LightPlan> {
     vec![LightPlan {
         light: lp.light.clone(),
         bands: lp.bands.clone(),
+        sampled: lp.sampled,
         ghosts: vec![lp.ghosts[g].clone()],
         dropped: Vec::new(),
     }]

@@ -6,7 +6,7 @@
 //! throughput at the band's own wavelength.
 
 use flarebench_sdk::LensSystem;
-use flarebench_sdk::color::{LightSpectrum, SpectralSampling};
+use flarebench_sdk::color::{LightSpectrum, SAMPLING_MAX_NM, SAMPLING_MIN_NM, SpectralSampling};
 use flarebench_sdk::ghost::GhostPath;
 use flarebench_sdk::system::SurfaceKind;
 
@@ -51,27 +51,19 @@ fn path_throughput(path: GhostPath, f: &[[f64; 4]], sensor: usize) -> f64 {
 pub struct GhostColours {
     /// Fine wavelengths, their colour weights (for the light) and the surface factors there.
     fine: Vec<(f64, [f32; 3], Vec<[f64; 4]>)>,
-    /// Surface factors at each traced band's wavelength.
-    band_factors: Vec<Vec<[f64; 4]>>,
-    /// Band edges (nm): band k covers `[edges[k], edges[k + 1])`.
-    edges: Vec<f64>,
     sensor: usize,
     /// The light's intensity, scaling every colour.
     intensity: f32,
 }
 
 impl GhostColours {
-    /// For `system` under `light`, with traced bands at `band_lambdas` (stratified over
-    /// 380–780 nm, as [`SpectralSampling`] places them). `intensity` scales every colour.
+    /// For `system` under `light`; `intensity` scales every colour.
     pub fn new(
         system: &LensSystem,
         light: LightSpectrum,
-        band_lambdas: &[f64],
         intensity: f32,
     ) -> Result<Self, GhostRenderError> {
         let fine = SpectralSampling::new(FINE_BANDS, light)?;
-        let k = band_lambdas.len();
-        let width = 400.0 / k as f64;
         Ok(GhostColours {
             fine: fine
                 .wavelengths_nm()
@@ -79,45 +71,24 @@ impl GhostColours {
                 .zip(fine.weights())
                 .map(|(&l, &w)| (l, w, surface_factors(system, l)))
                 .collect(),
-            band_factors: band_lambdas
-                .iter()
-                .map(|&l| surface_factors(system, l))
-                .collect(),
-            edges: (0..=k).map(|i| 380.0 + width * i as f64).collect(),
             sensor: system.sensor_index(),
             intensity,
         })
     }
 
-    /// The colour of each traced band for `path`: Σ over the band's fine steps of
-    /// weight · T(λ) / T(λ_band).
-    pub fn band_colours(&self, path: GhostPath) -> Vec<[f32; 3]> {
-        (0..self.band_factors.len())
-            .map(|k| {
-                let t_band = path_throughput(path, &self.band_factors[k], self.sensor);
-                let in_bin = |l: f64| l >= self.edges[k] && l < self.edges[k + 1];
-                self.sum(path, t_band, in_bin)
-            })
-            .collect()
-    }
-
-    /// The colour of the whole spectrum traced once at a wavelength whose factors are those of
-    /// band `k`.
-    pub fn merged_colour(&self, path: GhostPath, k: usize) -> [f32; 3] {
-        self.group_colour(path, 0..self.band_factors.len(), k)
-    }
-
-    /// The colour of bands `group` (a range of band indices) traced once at band `k`: Σ over
-    /// the group's fine steps of their weight × throughput relative to band `k`'s.
-    pub fn group_colour(
+    /// The colour of bin `i` of `m` equal bins over 380–780 nm (the bins of an `m`-band
+    /// [`SpectralSampling`]), relative to the throughput at the bin's centre, where the ghost
+    /// is traced. For `m` equal to the light's band count it is that band's colour.
+    pub fn bin_colour(
         &self,
+        system: &LensSystem,
         path: GhostPath,
-        group: std::ops::Range<usize>,
-        k: usize,
+        m: usize,
+        i: usize,
     ) -> [f32; 3] {
-        let t_band = path_throughput(path, &self.band_factors[k], self.sensor);
-        let (lo, hi) = (self.edges[group.start], self.edges[group.end]);
-        let last = group.end == self.band_factors.len();
+        let (lo, hi, centre) = bin(m, i);
+        let t_band = path_throughput(path, &surface_factors(system, centre), self.sensor);
+        let last = i + 1 >= m;
         self.sum(path, t_band, |l| l >= lo && (l < hi || last))
     }
 
@@ -136,6 +107,17 @@ impl GhostColours {
         }
         c
     }
+}
+
+/// Bin `i` of `m` equal bins over the sampled range: its edges and centre (nm), the centre
+/// computed as `SpectralSampling::new(m, …)` computes its wavelengths.
+pub fn bin(m: usize, i: usize) -> (f64, f64, f64) {
+    let width = (SAMPLING_MAX_NM - SAMPLING_MIN_NM) / m.max(1) as f64;
+    (
+        SAMPLING_MIN_NM + width * i as f64,
+        SAMPLING_MIN_NM + width * (i + 1) as f64,
+        SAMPLING_MIN_NM + (i as f64 + 0.5) * width,
+    )
 }
 
 #[cfg(test)]
@@ -160,15 +142,15 @@ mod tests {
             first: 2,
             second: 1,
         };
-        let c = GhostColours::new(&sys, LightSpectrum::D65, &[450.0, 550.0, 650.0], 1.0).unwrap();
-        let bands = c.band_colours(path);
+        let c = GhostColours::new(&sys, LightSpectrum::D65, 1.0).unwrap();
+        let bands: Vec<[f32; 3]> = (0..3).map(|i| c.bin_colour(&sys, path, 3, i)).collect();
         let total: [f32; 3] = bands
             .iter()
             .fold([0.0; 3], |a, b| [a[0] + b[0], a[1] + b[1], a[2] + b[2]]);
         for ch in total {
             assert!((ch - 1.0).abs() < 1e-3, "{total:?}");
         }
-        let m = c.merged_colour(path, 1);
+        let m = c.bin_colour(&sys, path, 1, 0);
         assert!(
             (0..3).all(|i| (m[i] - total[i]).abs() < 1e-5),
             "{m:?} vs {total:?}"
@@ -180,8 +162,8 @@ mod tests {
                 index: 1.38,
             };
         }
-        let c = GhostColours::new(&sys, LightSpectrum::D65, &[450.0, 550.0, 650.0], 1.0).unwrap();
-        let m = c.merged_colour(path, 1);
+        let c = GhostColours::new(&sys, LightSpectrum::D65, 1.0).unwrap();
+        let m = c.bin_colour(&sys, path, 1, 0);
         assert!(m[2] > m[0] && m[2] > 1.0, "{m:?}");
     }
 }

@@ -13,11 +13,13 @@ use flarebench_sdk::ghost::render::{Band, Frame};
 use flarebench_sdk::ghost::table::BoundsTable;
 use flarebench_sdk::ghost::{GhostPath, GridTrace, Rect, enumerate_ghosts};
 use flarebench_sdk::trace::InterfaceTableSet;
+use std::collections::HashMap;
+
 use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::GhostRenderError;
-use crate::colour::GhostColours;
+use crate::colour::{GhostColours, bin};
 use crate::scene::{LightSpec, Quality};
 
 /// Wavelength at which bounds and energies are found (nm).
@@ -27,8 +29,11 @@ pub const BOUNDS_LAMBDA_NM: f64 = 550.0;
 #[derive(Debug)]
 pub struct LightPlan {
     pub light: LightSpec,
-    /// Every band of the light's spectral sampling.
+    /// Every band traced: first the `sampled` bands of the light's spectral sampling, then
+    /// the bins of the coarser samplings some ghosts are traced at ([`GhostJob::bands`]).
     pub bands: Vec<Band>,
+    /// Bands of the light's own spectral sampling (the plan's band count).
+    pub sampled: usize,
     pub ghosts: Vec<GhostJob>,
     pub dropped: Vec<DroppedGhost>,
 }
@@ -44,8 +49,10 @@ pub struct GhostJob {
     /// The ghost is drawn into a coarse copy of the frame with this many pixels a side per
     /// coarse pixel (a power of two; 1 = full resolution): see [`coarse_factor`].
     pub downscale: usize,
-    /// The wavelengths the ghost is traced at: groups of neighbouring bands, each traced once
-    /// at its middle band in the group's summed colour ([`band_groups`]).
+    /// The wavelengths the ghost is traced at: the `m` equal bins of its own spectral
+    /// sampling (`m` up to the plan's band count, as many as keep neighbouring bins within
+    /// half a drawn pixel of dispersion), each traced at its centre in the colour of its
+    /// whole bin ([`GhostColours::bin_colour`]).
     pub bands: Vec<GhostBand>,
     pub energy_share: f64,
 }
@@ -65,18 +72,6 @@ impl GhostJob {
     pub fn spectral(&self) -> bool {
         self.bands.len() > 1
     }
-}
-
-/// Splits `k` bands into `m` (1 ≤ m ≤ k) contiguous groups of as equal size as can be; each
-/// group with the band it is traced at (its middle).
-pub fn band_groups(k: usize, m: usize) -> Vec<(std::ops::Range<usize>, usize)> {
-    let m = m.clamp(1, k.max(1));
-    (0..m)
-        .map(|g| {
-            let (a, b) = (g * k / m, (g + 1) * k / m);
-            (a..b, (a + b) / 2)
-        })
-        .collect()
 }
 
 /// Why a ghost was left out.
@@ -169,12 +164,7 @@ pub fn plan(
                 .zip(sampling.weights())
                 .map(|(&l, &rgb)| Band::new(system, l, rgb.map(|c| c * light.intensity as f32)))
                 .collect();
-            let colours = GhostColours::new(
-                system,
-                light.spectrum,
-                sampling.wavelengths_nm(),
-                light.intensity as f32,
-            )?;
+            let colours = GhostColours::new(system, light.spectrum, light.intensity as f32)?;
             let theta = light.theta_deg.to_radians();
             let phi = light.phi_deg.to_radians();
             let found: Vec<(GhostPath, Option<GhostBounds>)> = match precomputed {
@@ -216,6 +206,23 @@ pub fn plan(
                 sampling.wavelengths_nm()[0],
                 sampling.wavelengths_nm()[bands - 1],
             );
+            let mut band_list = band_list;
+            // (m, i) → index into `band_list` of bin i of an m-band sampling; the light's own
+            // sampling is there from the start, coarser ones are added as ghosts need them.
+            let mut band_index: HashMap<(usize, usize), usize> =
+                (0..bands).map(|k| ((bands, k), k)).collect();
+            let on_frame = |b: &GhostBounds| overlaps_frame(&b.sensor.rotated(phi), frame);
+            let dim_below = if cull {
+                dim_threshold(
+                    found
+                        .iter()
+                        .filter_map(|(_, b)| b.as_ref().filter(|b| on_frame(b)))
+                        .map(|b| b.energy_share),
+                    quality.dim_budget(),
+                )
+            } else {
+                0.0
+            };
             let mut ghosts = Vec::new();
             let mut dropped = Vec::new();
             for (path, b) in found {
@@ -232,12 +239,12 @@ pub fn plan(
                     reason,
                     energy_share: b.energy_share,
                 };
-                if cull && b.energy_share < quality.energy_threshold() {
-                    dropped.push(drop(DropReason::Dim));
+                if cull && !on_frame(&b) {
+                    dropped.push(drop(DropReason::OffFrame));
                     continue;
                 }
-                if cull && !overlaps_frame(&b.sensor.rotated(phi), frame) {
-                    dropped.push(drop(DropReason::OffFrame));
+                if cull && b.energy_share < dim_below {
+                    dropped.push(drop(DropReason::Dim));
                     continue;
                 }
                 let cap = (MAX_GRID as f64 * grid_scale.max(1.0)).ceil() as usize;
@@ -261,11 +268,20 @@ pub fn plan(
                         bands
                     }
                 };
-                let ghost_bands = band_groups(bands, groups)
-                    .into_iter()
-                    .map(|(group, band)| GhostBand {
-                        band,
-                        rgb: colours.group_colour(path, group, band),
+                // The ghost's own sampling: `groups` equal bins, each traced at its centre
+                // in the colour of its whole bin. (Grouping the light's bands unevenly
+                // instead — 31 into 16, say — draws copies of uneven weight and spacing.)
+                let ghost_bands = (0..groups)
+                    .map(|i| {
+                        let band = *band_index.entry((groups, i)).or_insert_with(|| {
+                            let (_, _, lambda) = bin(groups, i);
+                            band_list.push(Band::new(system, lambda, [0.0; 3]));
+                            band_list.len() - 1
+                        });
+                        GhostBand {
+                            band,
+                            rgb: colours.bin_colour(system, path, groups, i),
+                        }
                     })
                     .collect();
                 ghosts.push(GhostJob {
@@ -280,11 +296,36 @@ pub fn plan(
             Ok(LightPlan {
                 light: light.clone(),
                 bands: band_list,
+                sampled: bands,
                 ghosts,
                 dropped,
             })
         })
         .collect()
+}
+
+/// The energy share under which ghosts are dim: the dimmest ghosts of `shares` (each ghost's
+/// energy over the direct image's) are dropped, dimmest first, while together they carry at
+/// most `budget` of the sum of all; the result is the share of the first ghost kept (ghosts
+/// with less are dropped, ties kept together). 0 when nothing can be dropped.
+pub fn dim_threshold(shares: impl Iterator<Item = f64>, budget: f64) -> f64 {
+    let mut s: Vec<f64> = shares.filter(|e| e.is_finite()).map(|e| e.max(0.0)).collect();
+    s.sort_by(f64::total_cmp);
+    let allowed = budget * s.iter().sum::<f64>();
+    let mut acc = 0.0;
+    let mut i = 0;
+    // Whole runs of equal shares go together, so that the threshold splits no tie.
+    while i < s.len() {
+        let j = s[i..].partition_point(|&e| e == s[i]) + i;
+        let run: f64 = s[i..j].iter().sum();
+        if acc + run > allowed {
+            return s[i];
+        }
+        acc += run;
+        i = j;
+    }
+    // Everything fits the budget (a budget ≥ 1): drop all.
+    f64::INFINITY
 }
 
 /// Largest coarse-frame factor of the presets.

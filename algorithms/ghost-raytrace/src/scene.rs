@@ -156,12 +156,16 @@ impl Quality {
         }
     }
 
-    /// Ghosts whose energy share (of the direct image) is below this are left out.
-    pub fn energy_threshold(self) -> f64 {
+    /// The share of the ghosts' energy on the frame that may be left out: the dimmest
+    /// ghosts are dropped, dimmest first, while together they carry at most this much
+    /// ([`crate::plan::dim_threshold`]). Measured on the Nikon zoom (480×270, light 10°, 30°,
+    /// 31 bands): a fixed cut at 1e-6 of the direct image's energy dropped 83 of 210 ghosts
+    /// and 3.2% of the ghost energy, which alone made 2.2% of the default's error.
+    pub fn dim_budget(self) -> f64 {
         match self {
-            Quality::Fast => 1e-5,
-            Quality::Default => 1e-6,
-            Quality::High => 1e-8,
+            Quality::Fast => 3e-2,
+            Quality::Default => 3e-3,
+            Quality::High => 3e-4,
         }
     }
 }
