@@ -80,7 +80,7 @@ pub struct MatrixGhost {
 /// The ghost `path` of `system` at `lambda_nm`; `None` if the path cannot be built or its
 /// stop matrix is singular (`A_stop` = 0: every entrance height meets the stop at one point).
 pub fn ghost(system: &LensSystem, path: GhostPath, lambda_nm: f64) -> Option<MatrixGhost> {
-    let seq = Sequence::ghost(system, lambda_nm, path.first, path.second)
+    let seq = Sequence::ghost_path(system, lambda_nm, &path)
         .ok()?
         .with_interface_tables();
     let p = path_matrices(&seq)?;

@@ -41,15 +41,7 @@ fn heliar() -> LensSystem {
 
 #[test]
 fn a_plate_ghost_is_the_stop_shifted_by_two_extra_passes() {
-    let g = matrix::ghost(
-        &plate(),
-        GhostPath {
-            first: 2,
-            second: 1,
-        },
-        550.0,
-    )
-    .unwrap();
+    let g = matrix::ghost(&plate(), GhostPath::two(2, 1), 550.0).unwrap();
     // Flat surfaces: no magnification; the ghost crosses the plate three times, so its centre
     // is (5 + 3·3/1.5 + 10) tan θ = 21 tan θ (the direct image: 17 tan θ).
     assert!((g.magnification - 1.0).abs() < 1e-12);
@@ -85,7 +77,7 @@ fn every_heliar_ghost_matrix_matches_the_real_trace_in_the_paraxial_limit() {
     let mut checked = 0;
     let mut worst: f64 = 0.0;
     for path in enumerate_ghosts(&sys) {
-        let seq = Sequence::ghost(&sys, lambda, path.first, path.second).unwrap();
+        let seq = Sequence::ghost(&sys, lambda, path.first(), path.second()).unwrap();
         let m = path_matrices(&seq).expect("every ghost path crosses the stop");
         let mut hits = Vec::new();
         let mut trace = |theta: f64, h: f64| {
@@ -130,7 +122,7 @@ fn every_heliar_ghost_matrix_matches_the_real_trace_in_the_paraxial_limit() {
         );
         assert!(close(m.to_stop.b, s3.unwrap() / u), "{path}: B_stop");
         // Near the axis the real ray's Fresnel throughput is the normal-incidence one.
-        let with_tables = Sequence::ghost(&sys, lambda, path.first, path.second)
+        let with_tables = Sequence::ghost(&sys, lambda, path.first(), path.second())
             .unwrap()
             .with_interface_tables();
         let tp = path_matrices(&with_tables).unwrap().throughput;
@@ -167,10 +159,7 @@ const ENERGY_TOL: f64 = 1e-4;
 #[test]
 fn the_mesh_carries_each_ghosts_flux() {
     let sys = plate();
-    let path = GhostPath {
-        first: 2,
-        second: 1,
-    };
+    let path = GhostPath::two(2, 1);
     let frame = Frame {
         width: 200,
         height: 200,
