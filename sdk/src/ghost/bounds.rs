@@ -179,7 +179,12 @@ pub struct ReflectanceBounds {
 impl ReflectanceBounds {
     /// From the interface tables of `system` (e.g. at `BOUNDS_LAMBDA_NM`).
     pub fn new(system: &LensSystem, tables: &InterfaceTableSet) -> Self {
-        let cos_min = BOUND_MAX_INCIDENCE_DEG.to_radians().cos();
+        Self::up_to(system, tables, BOUND_MAX_INCIDENCE_DEG)
+    }
+
+    /// [`Self::new`] over incidence angles from 0 to `max_incidence_deg`.
+    pub fn up_to(system: &LensSystem, tables: &InterfaceTableSet, max_incidence_deg: f64) -> Self {
+        let cos_min = max_incidence_deg.to_radians().cos();
         // Table entry j is at cos = j / (len − 1); include the entry below cos_min, which the
         // interpolation between it and the next one uses.
         let last = (crate::trace::TABLE_LEN - 1) as f64;
@@ -210,14 +215,15 @@ impl ReflectanceBounds {
 /// The geometric part of [`energy_bound`] at `theta`: the largest flux a path can carry for
 /// unit irradiance and unit throughput — every ray that enters the lens at all starts inside
 /// [`entrance_search_rect`], so at most its area (× [`ENTRANCE_AREA_MARGIN`]) × cos θ — over
-/// the direct image's flux `direct` ([`direct_flux`] at the same angle). Infinite when
-/// `direct` is 0 (nothing is culled then).
+/// the direct image's flux `direct` ([`direct_flux`] at the same angle). 0 when `direct` is
+/// 0: energy shares are 0 then, as [`precise`] defines them.
 pub fn energy_bound_scale(system: &LensSystem, theta: f64, direct: f64) -> f64 {
     let area = entrance_search_rect(system, theta).area() * ENTRANCE_AREA_MARGIN;
     if direct > 0.0 {
         area * theta.cos() / direct
     } else {
-        f64::INFINITY
+        // No direct image: every ghost's energy share is 0 by definition ([`precise`]).
+        0.0
     }
 }
 
