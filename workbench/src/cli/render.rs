@@ -11,7 +11,7 @@ use flarebench_sdk::ghost::render::Frame;
 use flarebench_sdk::starburst::{StarburstCache, StarburstSettings};
 
 use ghost_raytrace::plan::PlanOptions;
-use ghost_raytrace::reference::reference_image;
+use ghost_raytrace::reference::reference_image_of_order;
 use ghost_raytrace::scene::{LightSpec, Quality};
 use ghost_raytrace::{ghosts, plan};
 
@@ -21,6 +21,7 @@ use crate::input_image::read_input_image;
 use crate::lens_library;
 use crate::output::{ExrPrecision, ToneMap, ToneOperator, save_image_as};
 use crate::report::{ErrorReport, LightReport, RenderReport, Timings};
+use flarebench_sdk::ghost::ReflectionOrder;
 use flarebench_sdk::ghost::table::BoundsTable;
 
 #[derive(Debug, Args)]
@@ -46,6 +47,10 @@ pub struct RenderArgs {
     /// Speed against accuracy: fast, default or high (docs/performance.md gives each one's error).
     #[arg(long, default_value_t = Quality::Default)]
     pub quality: Quality,
+    /// Ghost paths: 2 (two reflections) or 4 (two and four reflections; four-reflection paths
+    /// whose energy bound is under the quality's threshold are left out before tracing).
+    #[arg(long, default_value_t = ReflectionOrder::Two)]
+    pub reflections: ReflectionOrder,
     #[command(flatten)]
     pub iris: IrisArgs,
     /// Largest factor by which a large, smooth ghost may be drawn coarser than the output
@@ -314,6 +319,7 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
     let q = args.quality;
     let opts = PlanOptions {
         max_downscale: args.max_downscale,
+        reflections: args.reflections,
         ..PlanOptions::for_quality(q, table.as_ref())
     };
     let mode = args.starburst.starburst;
@@ -342,7 +348,7 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
 
     let error = if args.reference {
         let t = Instant::now();
-        let reference = reference_image(sys, &aperture, frame, &lights)?;
+        let reference = reference_image_of_order(sys, &aperture, frame, &lights, args.reflections)?;
         timings.reference_ms = Some(ms(t));
         let c = img.compare(&reference)?;
         Some(ErrorReport {
