@@ -77,7 +77,8 @@ pub struct MatrixGhost {
     pub throughput: f64,
 }
 
-/// The ghost `path` of `system` at `lambda_nm`; `None` if the path cannot be built or its
+/// The ghost `path` (two or four reflections) of `system` at `lambda_nm`; `None` if the path
+/// cannot be built (`Sequence::ghost_path` refuses its order) or its
 /// stop matrix is singular (`A_stop` = 0: every entrance height meets the stop at one point).
 pub fn ghost(system: &LensSystem, path: GhostPath, lambda_nm: f64) -> Option<MatrixGhost> {
     let seq = Sequence::ghost_path(system, lambda_nm, &path)

@@ -61,6 +61,29 @@ fn a_plate_ghost_is_the_stop_shifted_by_two_extra_passes() {
     );
 }
 
+/// The chain of matrices takes a four-reflection path as it is: the plate's 2-1-2-1 ghost
+/// crosses the plate five times, (5 + 5·3/1.5 + 10) tan θ = 25 tan θ, and carries T R⁴ T.
+#[test]
+fn a_plate_four_reflection_ghost_is_two_more_passes_further() {
+    let g = matrix::ghost(&plate(), GhostPath::four(2, 1, 2, 1), 550.0).unwrap();
+    assert!((g.magnification - 1.0).abs() < 1e-12);
+    assert!(
+        (g.centre_per_tan - 25.0).abs() < 1e-12,
+        "{}",
+        g.centre_per_tan
+    );
+    assert!((g.entrance_area_scale - 1.0).abs() < 1e-12);
+    let r: f64 = 0.04;
+    let want = (1.0 - r) * r.powi(4) * (1.0 - r);
+    assert!(
+        (g.throughput / want - 1.0).abs() < 1e-9,
+        "{} vs {want}",
+        g.throughput
+    );
+    // An invalid order is no ghost.
+    assert!(matrix::ghost(&plate(), GhostPath::four(2, 1, 1, 0), 550.0).is_none());
+}
+
 /// Heights and angles small enough that third-order terms are below 1e-6 relative.
 const H_MM: f64 = 1e-3;
 const U_RAD: f64 = 1e-5;
