@@ -23,12 +23,9 @@ fn every_pair_of_reflecting_surfaces_is_a_ghost() {
     assert_eq!(reflecting_surfaces(&heliar), vec![0, 1, 2, 3, 4, 6, 7, 8]);
     let g = enumerate_ghosts(&heliar);
     assert_eq!(g.len(), 8 * 7 / 2);
-    assert!(g.iter().all(|p| p.first > p.second));
+    assert!(g.iter().all(|p| p.first() > p.second()));
     // Paths with reflections on both sides of the stop (surface 5) are included.
-    assert!(g.contains(&GhostPath {
-        first: 7,
-        second: 2
-    }));
+    assert!(g.contains(&GhostPath::two(7, 2)));
     let nikon = lens("nikon-zoom-short");
     let n = reflecting_surfaces(&nikon).len();
     assert_eq!(enumerate_ghosts(&nikon).len(), n * (n - 1) / 2);
@@ -74,10 +71,7 @@ fn precise_bounds_hold_every_passing_ray_and_are_symmetric_on_axis() {
     let tables = InterfaceTableSet::for_system(&sys, 550.0);
     let direct = bounds::direct_flux(&sys, &tables, 0.0, &mut scratch);
     assert!(direct > 0.0);
-    let path = GhostPath {
-        first: 4,
-        second: 3,
-    };
+    let path = GhostPath::two(4, 3);
     let b = bounds::precise(&sys, path, &tables, 0.0, direct, &mut scratch)
         .expect("ghost 4-3 reaches the sensor");
     let e = b.entrance;
@@ -149,12 +143,7 @@ fn bounds_tables_interpolate_and_refuse_other_lenses() {
     assert_eq!(angles, vec![0.0, 0.5, 1.0, 1.5, 2.0]);
     let table = BoundsTable::compute(&sys, &angles, BoundsMode::Precise, 550.0, &|| {});
     table.check_for(&sys).unwrap();
-    let g = table
-        .ghost_index(GhostPath {
-            first: 4,
-            second: 3,
-        })
-        .unwrap();
+    let g = table.ghost_index(GhostPath::two(4, 3)).unwrap();
     let (a, b) = (table.bounds[g][1].unwrap(), table.bounds[g][2].unwrap());
     let mid = table.lookup(g, 0.75).unwrap();
     assert_eq!(mid.entrance, a.entrance.union(&b.entrance));
@@ -181,4 +170,143 @@ fn bounds_tables_interpolate_and_refuse_other_lenses() {
         lit(&approx),
         lit(&table)
     );
+}
+
+/// Every four-reflection path the enumeration lists is exactly the set of surface quadruples
+/// that `Sequence::ghost_path` accepts (brute force over every quadruple of surfaces), and
+/// the count follows the closed form.
+#[test]
+fn four_reflection_paths_are_every_valid_quadruple() {
+    use flarebench_sdk::ghost::{enumerate_four_reflection_ghosts, four_reflection_count};
+    for stem in ["heliar-tronnier", "cooke-triplet-25mm"] {
+        let sys = lens(stem);
+        let listed = enumerate_four_reflection_ghosts(&sys);
+        let n = sys.surfaces.len();
+        let mut brute = Vec::new();
+        for a in 0..n {
+            for b in 0..n {
+                for c in 0..n {
+                    for d in 0..n {
+                        let p = GhostPath::four(a, b, c, d);
+                        if Sequence::ghost_path(&sys, 550.0, &p).is_ok() {
+                            brute.push(p);
+                        }
+                    }
+                }
+            }
+        }
+        assert_eq!(listed, brute, "{stem}: listed in (a, b, c, d) order");
+        let r = reflecting_surfaces(&sys).len();
+        assert_eq!(listed.len(), four_reflection_count(r), "{stem}");
+    }
+    // The Heliar: 8 reflecting surfaces, 658 four-reflection paths; the two-reflection list
+    // is unchanged.
+    let heliar = lens("heliar-tronnier");
+    assert_eq!(enumerate_four_reflection_ghosts(&heliar).len(), 658);
+    assert_eq!(enumerate_ghosts(&heliar).len(), 28);
+    let nikon = lens("nikon-zoom-short");
+    assert_eq!(reflecting_surfaces(&nikon).len(), 21);
+    assert_eq!(enumerate_four_reflection_ghosts(&nikon).len(), 36_785);
+}
+
+/// The energy bound found before tracing really bounds the traced energy share of every
+/// four-reflection ghost of the Heliar that has light, at 10° and 30°, and so of every one
+/// that survives the cull.
+#[test]
+fn the_four_reflection_energy_bound_holds_on_the_heliar() {
+    use flarebench_sdk::ghost::bounds::{ReflectanceBounds, energy_bound, energy_bound_scale};
+    use flarebench_sdk::ghost::enumerate_four_reflection_ghosts;
+    let sys = lens("heliar-tronnier");
+    let tables = InterfaceTableSet::for_system(&sys, 550.0);
+    let refl = ReflectanceBounds::new(&sys, &tables);
+    let mut scratch = GridTrace::default();
+    for deg in [10.0f64, 30.0] {
+        let theta = deg.to_radians();
+        let direct = bounds::direct_flux(&sys, &tables, theta, &mut scratch);
+        let scale = energy_bound_scale(&sys, theta, direct);
+        assert!(scale.is_finite() && scale > 1.0, "{deg}°: {scale}");
+        let (mut lit, mut worst) = (0, 0.0f64);
+        for path in enumerate_four_reflection_ghosts(&sys) {
+            let bound = energy_bound(&refl, &path, scale);
+            assert!(bound > 0.0 && bound.is_finite(), "{path}: {bound}");
+            if let Some(b) = bounds::precise(&sys, path, &tables, theta, direct, &mut scratch) {
+                assert!(
+                    b.energy_share <= bound,
+                    "{deg}° {path}: traced {:e} over the bound {bound:e}",
+                    b.energy_share
+                );
+                worst = worst.max(b.energy_share / bound);
+                lit += 1;
+            }
+        }
+        assert!(
+            lit > 50,
+            "{deg}°: only {lit} four-reflection ghosts have light"
+        );
+        eprintln!("{deg}°: {lit} lit, largest traced/bound {worst:.3e}");
+    }
+}
+
+/// A table computed with four-reflection ghosts holds those whose bound reaches the
+/// threshold, is version 2, round-trips through JSON, and a version-1 table reads as before.
+#[test]
+fn bounds_tables_with_four_reflection_ghosts() {
+    use flarebench_sdk::ghost::table::{BoundsTable, TableOptions, VERSION, VERSION_FOUR};
+    use flarebench_sdk::ghost::{ReflectionOrder, enumerate_four_reflection_ghosts};
+    let sys = lens("heliar-tronnier");
+    let angles = [0.0, 1.0];
+    let two = BoundsTable::compute(&sys, &angles, BoundsMode::Approximate, 550.0, &|| {});
+    assert_eq!(two.version, VERSION);
+    assert!(!two.has_four_reflections());
+    let text = serde_json::to_string(&two).unwrap();
+    assert!(!text.contains("four_reflection") && !text.contains("third"));
+    let started = std::sync::atomic::AtomicUsize::new(0);
+    let options = TableOptions {
+        reflections: ReflectionOrder::Four,
+        four_reflection_bound_threshold: 1e-5,
+    };
+    let four = BoundsTable::compute_with(
+        &sys,
+        &angles,
+        BoundsMode::Approximate,
+        550.0,
+        &options,
+        &|n| started.store(n, std::sync::atomic::Ordering::Relaxed),
+        &|| {},
+    );
+    assert_eq!(four.version, VERSION_FOUR);
+    four.check_for(&sys).unwrap();
+    assert_eq!(four.four_reflection_paths, Some(658));
+    let kept = four.ghosts.iter().filter(|g| g.is_four()).count();
+    assert!(kept > 0 && kept < 658, "{kept} kept");
+    assert_eq!(
+        started.load(std::sync::atomic::Ordering::Relaxed),
+        28 + kept
+    );
+    assert_eq!(&four.ghosts[..28], &two.ghosts[..]);
+    // Every four-reflection path the table left out has a bound below the threshold at both
+    // angles, so the lowest-bound path of all is not in it.
+    assert!(kept < enumerate_four_reflection_ghosts(&sys).len());
+    let text = serde_json::to_string(&four).unwrap();
+    assert!(text.contains(r#""version":2"#) && text.contains(r#""third":"#));
+    let back: BoundsTable = serde_json::from_str(&text).unwrap();
+    assert!(back == four);
+    // A version-1 file with a four-reflection path, or a version-2 file without the threshold,
+    // is refused.
+    let mut bad = four.clone();
+    bad.version = VERSION;
+    assert!(bad.check_for(&sys).is_err());
+    let mut bad = two.clone();
+    bad.version = VERSION_FOUR;
+    assert!(bad.check_for(&sys).is_err());
+    // A file written before four-reflection ghosts existed reads as it always did.
+    let fp = flarebench_sdk::ghost::table::fingerprint(&sys);
+    let old = format!(
+        r#"{{"format":"flarebench-ghost-bounds","version":1,"lens":"heliar-tronnier","lens_fingerprint":"{fp}","mode":"approximate","wavelength_nm":550.0,"angles_deg":[0.0],"ghosts":[{{"first":1,"second":0}}],"bounds":[[null]]}}"#
+    );
+    let t: BoundsTable = serde_json::from_str(&old).unwrap();
+    t.check_for(&sys).unwrap();
+    assert_eq!(t.ghosts, vec![GhostPath::two(1, 0)]);
+    assert!(!t.has_four_reflections());
+    assert_eq!(serde_json::to_string(&t).unwrap(), old);
 }

@@ -10,10 +10,11 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use flarebench_sdk::LensSystem;
 use flarebench_sdk::aperture::Aperture;
+use flarebench_sdk::ghost::ReflectionOrder;
 use flarebench_sdk::ghost::render::Frame;
 use flarebench_sdk::image::HdrImage;
 use flarebench_sdk::io::write_atomically;
-use ghost_raytrace::reference::{reference_image, reference_key};
+use ghost_raytrace::reference::{reference_image_of_order, reference_key};
 use ghost_raytrace::scene::LightSpec;
 
 use crate::output::{encode_exr_with, read_exr_with_attributes};
@@ -42,7 +43,7 @@ impl std::fmt::Display for ReferenceSource {
     }
 }
 
-/// The reference image of the scene: read from `file` when it exists (and was made for this
+/// The reference image of the scene (its ghosts of `reflections`): read from `file` when it exists (and was made for this
 /// scene — else an error naming both keys), otherwise rendered and, with `file`, written
 /// there.
 pub fn reference_for(
@@ -51,8 +52,9 @@ pub fn reference_for(
     frame: Frame,
     lights: &[LightSpec],
     file: Option<&Path>,
+    reflections: ReflectionOrder,
 ) -> Result<(HdrImage, ReferenceSource)> {
-    let key = reference_key(system, aperture, &frame, lights);
+    let key = reference_key(system, aperture, &frame, lights, reflections);
     if let Some(path) = file.filter(|p| p.exists()) {
         let (img, text) = read_exr_with_attributes(path)?;
         match text.get(KEY_ATTRIBUTE) {
@@ -80,7 +82,7 @@ pub fn reference_for(
         }
         return Ok((img, ReferenceSource::Read(path.to_path_buf())));
     }
-    let img = reference_image(system, aperture, frame, lights)?;
+    let img = reference_image_of_order(system, aperture, frame, lights, reflections)?;
     let Some(path) = file else {
         return Ok((img, ReferenceSource::Rendered));
     };

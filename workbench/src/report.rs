@@ -4,8 +4,9 @@ use serde::Serialize;
 
 use crate::compose::StarburstLine;
 
+use flarebench_sdk::ghost::ReflectionOrder;
 use flarebench_sdk::ghost::render::GhostStats;
-use ghost_raytrace::plan::{DropReason, LightPlan};
+use ghost_raytrace::plan::{DropReason, FourReflectionSummary, LightPlan};
 
 /// Time spent per stage (milliseconds).
 #[derive(Clone, Debug, Default, Serialize)]
@@ -65,7 +66,12 @@ pub struct LightReport {
     pub dropped_energy_fraction: f64,
     pub bands: usize,
     pub ghosts: Vec<GhostLine>,
+    /// Every ghost left out, four-reflection ghosts culled by their energy bound included
+    /// (reason `bound`, the bound as their energy share).
     pub dropped: Vec<DroppedLine>,
+    /// With `--reflections 4`: what became of the four-reflection ghosts (absent otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub four_reflections: Option<FourReflectionSummary>,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -128,6 +134,8 @@ impl LightReport {
                     energy_share: d.energy_share,
                 })
                 .collect(),
+            four_reflections: (lp.reflections == ReflectionOrder::Four)
+                .then(|| lp.four_reflection_summary()),
         }
     }
 }
@@ -165,6 +173,18 @@ impl RenderReport {
                 100.0 * l.dropped_energy_fraction,
                 l.ghost_energy_share
             );
+            if let Some(f) = &l.four_reflections {
+                s += &format!(
+                    "  four-reflection ghosts: {} paths, {} left out by the energy bound (≤ {:.3e} of the direct image's energy), {} left out after their bounds were found ({:.3e}), {} traced carrying {:.3e}\n",
+                    f.paths,
+                    f.bounded_out,
+                    f.bounded_out_energy_share,
+                    f.dropped_after_bounds,
+                    f.dropped_energy_share,
+                    f.traced,
+                    f.traced_energy_share
+                );
+            }
             for g in l.ghosts.iter().take(5) {
                 s += &format!(
                     "  ghost {:>6}: energy {:.3e}, grid {}², {} band{}, drawn at 1/{}\n",

@@ -209,7 +209,7 @@ fn the_selected_ghost_path_is_traced() {
     key(&mut app, KeyCode::Char(']'));
     assert_eq!(app.ghost, Some(0));
     let g = app.analysis.ghosts[0];
-    assert_eq!((g.first, g.second), (1, 0));
+    assert_eq!((g.first(), g.second()), (1, 0));
     assert!(!app.ghost_rays.is_empty());
     // The path goes back toward the object after the first reflection (z decreases).
     let reverses = app

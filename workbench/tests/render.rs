@@ -265,3 +265,170 @@ fn a_light_placed_by_its_image_position_images_there() {
         );
     }
 }
+
+/// `--reflections 4` adds the Heliar's 658 four-reflection paths: the report counts them,
+/// lists those the energy bound left out (reason `bound`, written a-b-c-d) and their share,
+/// and the two-reflection part of the render is what `--reflections 2` gives.
+#[test]
+fn four_reflection_ghosts_are_rendered_and_reported() {
+    let dir = temp_dir("render");
+    let run = |extra: &[&str]| -> Value {
+        let o = dir.join("four.exr");
+        let mut a = vec![
+            "render",
+            "heliar-tronnier",
+            "--light",
+            "10,30",
+            "--size",
+            "192x108",
+            "--quality",
+            "fast",
+            "--starburst",
+            "off",
+            "--report",
+            "--json",
+            "-o",
+            o.to_str().unwrap(),
+        ];
+        a.extend_from_slice(extra);
+        json(&a)
+    };
+    let two = run(&[]);
+    let four = run(&["--reflections", "4"]);
+    let (l2, l4) = (&two["lights"][0], &four["lights"][0]);
+    assert!(l2.get("four_reflections").is_none(), "{l2}");
+    assert_eq!(l2["ghosts_total"].as_u64(), Some(28));
+    assert_eq!(l4["ghosts_total"].as_u64(), Some(28 + 658));
+    let s = &l4["four_reflections"];
+    assert_eq!(s["paths"].as_u64(), Some(658));
+    let bounded = s["bounded_out"].as_u64().unwrap();
+    assert!(bounded > 0 && bounded < 658, "{s}");
+    assert_eq!(
+        s["bounded_out"].as_u64().unwrap()
+            + s["dropped_after_bounds"].as_u64().unwrap()
+            + s["traced"].as_u64().unwrap(),
+        658
+    );
+    let dropped = l4["dropped"].as_array().unwrap();
+    let by_bound: Vec<&Value> = dropped.iter().filter(|d| d["reason"] == "bound").collect();
+    assert_eq!(by_bound.len() as u64, bounded);
+    let share: f64 = by_bound
+        .iter()
+        .map(|d| d["energy_share"].as_f64().unwrap())
+        .sum();
+    let want = s["bounded_out_energy_share"].as_f64().unwrap();
+    assert!((share / want - 1.0).abs() < 1e-9, "{share} vs {want}");
+    for d in &by_bound {
+        let name = d["ghost"].as_str().unwrap();
+        assert_eq!(name.split('-').count(), 4, "{name}");
+        assert!(d["energy_share"].as_f64().unwrap() < 1e-5, "{d}");
+    }
+    // More ghost energy in all, and more of it left out (the bounds).
+    let e = |l: &Value, k: &str| l[k].as_f64().unwrap();
+    assert!(e(l4, "ghost_energy_share") > e(l2, "ghost_energy_share"));
+    assert!(e(l4, "dropped_energy_fraction") > e(l2, "dropped_energy_fraction"));
+    // The four-reflection ghosts only add light.
+    for c in 0..3 {
+        let (a, b) = (
+            two["image_sum_rgb"][c].as_f64().unwrap(),
+            four["image_sum_rgb"][c].as_f64().unwrap(),
+        );
+        assert!(b >= a, "channel {c}: {b} < {a}");
+    }
+    // The text report says it too.
+    let o = dir.join("four.exr");
+    let out = flarebench(&[
+        "render",
+        "heliar-tronnier",
+        "--light",
+        "10,30",
+        "--size",
+        "192x108",
+        "--quality",
+        "fast",
+        "--starburst",
+        "off",
+        "--reflections",
+        "4",
+        "--report",
+        "-o",
+        o.to_str().unwrap(),
+    ]);
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("four-reflection ghosts: 658 paths"), "{text}");
+    // Only 2 and 4.
+    let out = flarebench(&[
+        "render",
+        "heliar-tronnier",
+        "--light",
+        "10,30",
+        "--reflections",
+        "3",
+        "-o",
+        o.to_str().unwrap(),
+    ]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("reflections must be 2"));
+}
+
+/// `precompute --reflections 4` writes a version-2 table with the four-reflection ghosts
+/// that pass the bound; `render --reflections 4 --precomputed` uses it, and gives about the
+/// same image as without a table.
+#[test]
+fn precomputed_four_reflection_tables() {
+    let dir = temp_dir("render");
+    let table = dir.join("heliar-bounds-4.json");
+    let v = json(&[
+        "precompute",
+        "heliar-tronnier",
+        "-o",
+        table.to_str().unwrap(),
+        "--max-angle-deg",
+        "2",
+        "--reflections",
+        "4",
+        "--bound-threshold",
+        "1e-5",
+        "--json",
+    ]);
+    assert_eq!(v["four_reflection_paths"].as_u64(), Some(658));
+    let kept = v["four_reflection_ghosts"].as_u64().unwrap();
+    assert!(kept > 0 && kept < 658, "{v}");
+    assert_eq!(v["ghosts"].as_u64(), Some(28 + kept));
+    let text = std::fs::read_to_string(&table).unwrap();
+    assert!(text.contains(r#""version":2"#));
+    let run = |extra: &[&str]| -> Value {
+        let o = dir.join("p4.exr");
+        let mut a = vec![
+            "render",
+            "heliar-tronnier",
+            "--light",
+            "1.25,10",
+            "--size",
+            "160x90",
+            "--quality",
+            "fast",
+            "--starburst",
+            "off",
+            "--reflections",
+            "4",
+            "--json",
+            "-o",
+            o.to_str().unwrap(),
+        ];
+        a.extend_from_slice(extra);
+        json(&a)
+    };
+    let direct = run(&[]);
+    let pre = run(&["--precomputed", table.to_str().unwrap()]);
+    assert_eq!(
+        direct["lights"][0]["four_reflections"]["bounded_out"],
+        pre["lights"][0]["four_reflections"]["bounded_out"]
+    );
+    let (a, b) = (
+        direct["image_sum_rgb"][1].as_f64().unwrap(),
+        pre["image_sum_rgb"][1].as_f64().unwrap(),
+    );
+    assert!((a / b - 1.0).abs() < 0.05, "image energy {a} vs {b}");
+}

@@ -1,5 +1,7 @@
 //! Ghosts from paraxial ray-transfer matrices (after Lee & Eisemann 2013, "Practical
-//! real-time lens-flare rendering"): along each two-reflection path, the 2×2 matrices from the
+//! real-time lens-flare rendering"): along each two-reflection path (the plugin draws those
+//! only; [`matrix::ghost`] takes four-reflection paths too, whose chain is just longer, but
+//! the plugin has no energy cull and N⁴/8 of them would each be drawn), the 2×2 matrices from the
 //! entrance plane to the stop and to the sensor ([`matrix`]) make the ghost an affine image of
 //! the aperture — the stop's opening scaled by `m = A_sensor / A_stop`, centred at
 //! `(B_sensor − m·B_stop) · tan θ` — drawn as a polygon of uniform radiance carrying the flux

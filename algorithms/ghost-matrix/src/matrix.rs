@@ -77,10 +77,11 @@ pub struct MatrixGhost {
     pub throughput: f64,
 }
 
-/// The ghost `path` of `system` at `lambda_nm`; `None` if the path cannot be built or its
+/// The ghost `path` (two or four reflections) of `system` at `lambda_nm`; `None` if the path
+/// cannot be built (`Sequence::ghost_path` refuses its order) or its
 /// stop matrix is singular (`A_stop` = 0: every entrance height meets the stop at one point).
 pub fn ghost(system: &LensSystem, path: GhostPath, lambda_nm: f64) -> Option<MatrixGhost> {
-    let seq = Sequence::ghost(system, lambda_nm, path.first, path.second)
+    let seq = Sequence::ghost_path(system, lambda_nm, &path)
         .ok()?
         .with_interface_tables();
     let p = path_matrices(&seq)?;

@@ -41,15 +41,7 @@ fn heliar() -> LensSystem {
 
 #[test]
 fn a_plate_ghost_is_the_stop_shifted_by_two_extra_passes() {
-    let g = matrix::ghost(
-        &plate(),
-        GhostPath {
-            first: 2,
-            second: 1,
-        },
-        550.0,
-    )
-    .unwrap();
+    let g = matrix::ghost(&plate(), GhostPath::two(2, 1), 550.0).unwrap();
     // Flat surfaces: no magnification; the ghost crosses the plate three times, so its centre
     // is (5 + 3·3/1.5 + 10) tan θ = 21 tan θ (the direct image: 17 tan θ).
     assert!((g.magnification - 1.0).abs() < 1e-12);
@@ -69,6 +61,29 @@ fn a_plate_ghost_is_the_stop_shifted_by_two_extra_passes() {
     );
 }
 
+/// The chain of matrices takes a four-reflection path as it is: the plate's 2-1-2-1 ghost
+/// crosses the plate five times, (5 + 5·3/1.5 + 10) tan θ = 25 tan θ, and carries T R⁴ T.
+#[test]
+fn a_plate_four_reflection_ghost_is_two_more_passes_further() {
+    let g = matrix::ghost(&plate(), GhostPath::four(2, 1, 2, 1), 550.0).unwrap();
+    assert!((g.magnification - 1.0).abs() < 1e-12);
+    assert!(
+        (g.centre_per_tan - 25.0).abs() < 1e-12,
+        "{}",
+        g.centre_per_tan
+    );
+    assert!((g.entrance_area_scale - 1.0).abs() < 1e-12);
+    let r: f64 = 0.04;
+    let want = (1.0 - r) * r.powi(4) * (1.0 - r);
+    assert!(
+        (g.throughput / want - 1.0).abs() < 1e-9,
+        "{} vs {want}",
+        g.throughput
+    );
+    // An invalid order is no ghost.
+    assert!(matrix::ghost(&plate(), GhostPath::four(2, 1, 1, 0), 550.0).is_none());
+}
+
 /// Heights and angles small enough that third-order terms are below 1e-6 relative.
 const H_MM: f64 = 1e-3;
 const U_RAD: f64 = 1e-5;
@@ -85,7 +100,7 @@ fn every_heliar_ghost_matrix_matches_the_real_trace_in_the_paraxial_limit() {
     let mut checked = 0;
     let mut worst: f64 = 0.0;
     for path in enumerate_ghosts(&sys) {
-        let seq = Sequence::ghost(&sys, lambda, path.first, path.second).unwrap();
+        let seq = Sequence::ghost(&sys, lambda, path.first(), path.second()).unwrap();
         let m = path_matrices(&seq).expect("every ghost path crosses the stop");
         let mut hits = Vec::new();
         let mut trace = |theta: f64, h: f64| {
@@ -130,7 +145,7 @@ fn every_heliar_ghost_matrix_matches_the_real_trace_in_the_paraxial_limit() {
         );
         assert!(close(m.to_stop.b, s3.unwrap() / u), "{path}: B_stop");
         // Near the axis the real ray's Fresnel throughput is the normal-incidence one.
-        let with_tables = Sequence::ghost(&sys, lambda, path.first, path.second)
+        let with_tables = Sequence::ghost(&sys, lambda, path.first(), path.second())
             .unwrap()
             .with_interface_tables();
         let tp = path_matrices(&with_tables).unwrap().throughput;
@@ -167,10 +182,7 @@ const ENERGY_TOL: f64 = 1e-4;
 #[test]
 fn the_mesh_carries_each_ghosts_flux() {
     let sys = plate();
-    let path = GhostPath {
-        first: 2,
-        second: 1,
-    };
+    let path = GhostPath::two(2, 1);
     let frame = Frame {
         width: 200,
         height: 200,

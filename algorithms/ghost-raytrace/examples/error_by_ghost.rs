@@ -26,6 +26,7 @@ fn alone(lp: &LightPlan, g: usize) -> Vec<LightPlan> {
         light: lp.light.clone(),
         bands: lp.bands.clone(),
         sampled: lp.sampled,
+        reflections: lp.reflections,
         ghosts: vec![lp.ghosts[g].clone()],
         dropped: Vec::new(),
     }]
@@ -73,7 +74,12 @@ fn main() {
                     j.bands.len(),
                     j.downscale
                 );
-                (ghosts::render(&sys, &aperture, frame, &alone(tp, k)).unwrap().0, what)
+                (
+                    ghosts::render(&sys, &aperture, frame, &alone(tp, k))
+                        .unwrap()
+                        .0,
+                    what,
+                )
             }
             None => {
                 let why = tp

@@ -36,14 +36,24 @@ fn surface_factors(system: &LensSystem, lambda_nm: f64) -> Vec<[f64; 4]> {
 
 /// Throughput of a ghost path at normal incidence from per-surface factors.
 fn path_throughput(path: GhostPath, f: &[[f64; 4]], sensor: usize) -> f64 {
-    // Forward to `first`, reflect; back to `second`, reflect; forward to the sensor.
-    let forward_in: f64 = f[..path.first].iter().map(|s| s[0]).product();
-    let backward: f64 = f[path.second + 1..path.first]
-        .iter()
-        .map(|s| s[2])
-        .product();
-    let forward_out: f64 = f[path.second + 1..sensor].iter().map(|s| s[0]).product();
-    forward_in * f[path.first][1] * backward * f[path.second][3] * forward_out
+    // Forward to the first reflection; then back and forward between reflections (two or
+    // four of them); then forward to the sensor. Each leg's transmittances are multiplied
+    // first, then the legs and reflectances in order (as the two-reflection form always did).
+    let r = path.reflections();
+    let mut t = 1.0;
+    let mut at: Option<usize> = None;
+    for (k, &s) in r.iter().enumerate() {
+        let leg: f64 = match at {
+            None => f[..s].iter().map(|x| x[0]).product(),
+            Some(p) if k % 2 == 0 => f[p + 1..s].iter().map(|x| x[0]).product(),
+            Some(p) => f[s + 1..p].iter().map(|x| x[2]).product(),
+        };
+        t = t * leg * f[s][if k % 2 == 0 { 1 } else { 3 }];
+        at = Some(s);
+    }
+    let last = at.unwrap_or(0);
+    let forward_out: f64 = f[last + 1..sensor].iter().map(|x| x[0]).product();
+    t * forward_out
 }
 
 /// Per-wavelength data for colouring every ghost of a lens under one light.
@@ -79,13 +89,7 @@ impl GhostColours {
     /// The colour of bin `i` of `m` equal bins over 380–780 nm (the bins of an `m`-band
     /// [`SpectralSampling`]), relative to the throughput at the bin's centre, where the ghost
     /// is traced. For `m` equal to the light's band count it is that band's colour.
-    pub fn bin_colour(
-        &self,
-        system: &LensSystem,
-        path: GhostPath,
-        m: usize,
-        i: usize,
-    ) -> [f32; 3] {
+    pub fn bin_colour(&self, system: &LensSystem, path: GhostPath, m: usize, i: usize) -> [f32; 3] {
         let (lo, hi, centre) = bin(m, i);
         let t_band = path_throughput(path, &surface_factors(system, centre), self.sensor);
         let last = i + 1 >= m;
@@ -138,10 +142,7 @@ mod tests {
                 Surface::sensor(10.0),
             ],
         );
-        let path = GhostPath {
-            first: 2,
-            second: 1,
-        };
+        let path = GhostPath::two(2, 1);
         let c = GhostColours::new(&sys, LightSpectrum::D65, 1.0).unwrap();
         let bands: Vec<[f32; 3]> = (0..3).map(|i| c.bin_colour(&sys, path, 3, i)).collect();
         let total: [f32; 3] = bands

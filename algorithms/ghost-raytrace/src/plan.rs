@@ -2,16 +2,22 @@
 //! left out and how much energy that drops.
 //!
 //! A ghost is left out when its energy share (its flux over the direct image's, from its
-//! bounds) is under the quality's threshold, or when its sensor bounds miss the frame. A ghost
+//! bounds) is under the quality's threshold, or when its sensor bounds miss the frame. With
+//! [`ReflectionOrder::Four`] the four-reflection ghosts come too, but first each is checked
+//! against a cheap upper bound on its energy share (`bounds::energy_bound`, no tracing): those
+//! whose bound is under the threshold are left out before anything is traced, reported with
+//! the bound as their energy share ([`DropReason::Bound`]). A ghost
 //! whose image moves less than half a pixel between the shortest and the longest wavelength
 //! band is traced once, with the bands' colours summed.
 
 use flarebench_sdk::LensSystem;
 use flarebench_sdk::color::SpectralSampling;
-use flarebench_sdk::ghost::bounds::{self, GhostBounds, MAX_GRID, MIN_GRID};
+use flarebench_sdk::ghost::bounds::{self, GhostBounds, MAX_GRID, MIN_GRID, ReflectanceBounds};
 use flarebench_sdk::ghost::render::{Band, Frame};
 use flarebench_sdk::ghost::table::BoundsTable;
-use flarebench_sdk::ghost::{GhostPath, GridTrace, Rect, enumerate_ghosts};
+use flarebench_sdk::ghost::{
+    GhostPath, GridTrace, Rect, ReflectionOrder, enumerate_ghosts_of_order,
+};
 use flarebench_sdk::trace::InterfaceTableSet;
 use std::collections::HashMap;
 
@@ -36,6 +42,8 @@ pub struct LightPlan {
     pub sampled: usize,
     pub ghosts: Vec<GhostJob>,
     pub dropped: Vec<DroppedGhost>,
+    /// The reflection order planned for.
+    pub reflections: ReflectionOrder,
 }
 
 /// A ghost to render.
@@ -84,6 +92,9 @@ pub enum DropReason {
     Dim,
     /// Sensor bounds outside the frame.
     OffFrame,
+    /// A four-reflection ghost whose energy bound (found before tracing) is under the
+    /// threshold; its `energy_share` is that bound, not a traced energy.
+    Bound,
 }
 
 #[derive(Clone, Copy, Debug, Serialize)]
@@ -100,6 +111,44 @@ impl LightPlan {
         let dropped: f64 = self.dropped.iter().map(|d| d.energy_share).sum();
         (kept + dropped, dropped)
     }
+
+    /// The four-reflection ghosts' part of the plan (all zero for two-reflection plans).
+    pub fn four_reflection_summary(&self) -> FourReflectionSummary {
+        let mut s = FourReflectionSummary::default();
+        for g in self.ghosts.iter().filter(|g| g.path.is_four()) {
+            s.traced += 1;
+            s.traced_energy_share += g.energy_share;
+        }
+        for d in self.dropped.iter().filter(|d| d.path.is_four()) {
+            if d.reason == DropReason::Bound {
+                s.bounded_out += 1;
+                s.bounded_out_energy_share += d.energy_share;
+            } else {
+                s.dropped_after_bounds += 1;
+                s.dropped_energy_share += d.energy_share;
+            }
+        }
+        s.paths = s.traced + s.bounded_out + s.dropped_after_bounds;
+        s
+    }
+}
+
+/// What became of a light's four-reflection ghosts.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct FourReflectionSummary {
+    /// Four-reflection paths enumerated.
+    pub paths: usize,
+    /// Left out before tracing by the energy bound ([`DropReason::Bound`]), and the sum of
+    /// their bounds (an upper bound on the energy they carry).
+    pub bounded_out: usize,
+    pub bounded_out_energy_share: f64,
+    /// Survived the bound, had their bounds found, then were left out (no light, too dim, off
+    /// the frame), and their energy share.
+    pub dropped_after_bounds: usize,
+    pub dropped_energy_share: f64,
+    /// Rendered, and their energy share.
+    pub traced: usize,
+    pub traced_energy_share: f64,
 }
 
 /// How to plan: quality, bands, culling, grid scale and where bounds come from.
@@ -119,6 +168,10 @@ pub struct PlanOptions<'a> {
     /// Largest coarse-frame factor a ghost may be drawn at (1: every ghost at full
     /// resolution, as the reference does).
     pub max_downscale: usize,
+    /// Two-reflection ghosts only (the default), or four-reflection ghosts too. A precomputed
+    /// table without some four-reflection ghost that survives the energy bound is not an
+    /// error: that ghost's bounds are traced for the light, as without a table.
+    pub reflections: ReflectionOrder,
 }
 
 impl<'a> PlanOptions<'a> {
@@ -132,6 +185,7 @@ impl<'a> PlanOptions<'a> {
             precomputed,
             all_bands: false,
             max_downscale: MAX_DOWNSCALE,
+            reflections: ReflectionOrder::Two,
         }
     }
 }
@@ -151,9 +205,12 @@ pub fn plan(
         precomputed,
         all_bands,
         max_downscale,
+        reflections,
     } = *opts;
-    let paths = enumerate_ghosts(system);
+    let paths = enumerate_ghosts_of_order(system, reflections);
     let tables = InterfaceTableSet::for_system(system, BOUNDS_LAMBDA_NM);
+    let four = reflections == ReflectionOrder::Four;
+    let reflectances = four.then(|| ReflectanceBounds::new(system, &tables));
     lights
         .iter()
         .map(|light| {
@@ -167,6 +224,38 @@ pub fn plan(
             let colours = GhostColours::new(system, light.spectrum, light.intensity as f32)?;
             let theta = light.theta_deg.to_radians();
             let phi = light.phi_deg.to_radians();
+            // The direct image's flux: for traced energies, and for the four-reflection bound.
+            let direct = (precomputed.is_none() || four)
+                .then(|| bounds::direct_flux(system, &tables, theta, &mut GridTrace::default()));
+            // Four-reflection ghosts whose energy bound is under the threshold are left out
+            // here, before anything of theirs is traced or looked up.
+            let mut bounded_out = Vec::new();
+            let candidates: Vec<GhostPath> = match (&reflectances, direct) {
+                (Some(refl), Some(direct)) if cull => {
+                    let scale = bounds::energy_bound_scale(system, theta, direct);
+                    let threshold = quality.energy_threshold();
+                    paths
+                        .iter()
+                        .copied()
+                        .filter(|p| {
+                            if !p.is_four() {
+                                return true;
+                            }
+                            let bound = bounds::energy_bound(refl, p, scale);
+                            let keep = bound >= threshold;
+                            if !keep {
+                                bounded_out.push(DroppedGhost {
+                                    path: *p,
+                                    reason: DropReason::Bound,
+                                    energy_share: bound,
+                                });
+                            }
+                            keep
+                        })
+                        .collect()
+                }
+                _ => paths.clone(),
+            };
             let found: Vec<(GhostPath, Option<GhostBounds>)> = match precomputed {
                 Some(table) => {
                     let max = table.angles_deg.last().copied().unwrap_or(0.0);
@@ -176,22 +265,25 @@ pub fn plan(
                             max_deg: max,
                         });
                     }
-                    paths
-                        .iter()
-                        .map(|&p| {
-                            (
-                                p,
-                                table
-                                    .ghost_index(p)
-                                    .and_then(|g| table.lookup(g, light.theta_deg)),
-                            )
+                    // A four-reflection ghost missing from the table (made without them, or
+                    // with a higher bound threshold) is traced, as without a table.
+                    candidates
+                        .par_iter()
+                        .map_init(GridTrace::default, |scratch, &p| {
+                            let b = match (table.ghost_index(p), direct) {
+                                (Some(g), _) => table.lookup(g, light.theta_deg),
+                                (None, Some(direct)) if p.is_four() => {
+                                    bounds::precise(system, p, &tables, theta, direct, scratch)
+                                }
+                                (None, _) => None,
+                            };
+                            (p, b)
                         })
                         .collect()
                 }
                 None => {
-                    let direct =
-                        bounds::direct_flux(system, &tables, theta, &mut GridTrace::default());
-                    paths
+                    let direct = direct.unwrap_or_default();
+                    candidates
                         .par_iter()
                         .map_init(GridTrace::default, |scratch, &path| {
                             (
@@ -293,12 +385,14 @@ pub fn plan(
                     energy_share: b.energy_share,
                 });
             }
+            dropped.extend(bounded_out);
             Ok(LightPlan {
                 light: light.clone(),
                 bands: band_list,
                 sampled: bands,
                 ghosts,
                 dropped,
+                reflections,
             })
         })
         .collect()
@@ -309,7 +403,10 @@ pub fn plan(
 /// most `budget` of the sum of all; the result is the share of the first ghost kept (ghosts
 /// with less are dropped, ties kept together). 0 when nothing can be dropped.
 pub fn dim_threshold(shares: impl Iterator<Item = f64>, budget: f64) -> f64 {
-    let mut s: Vec<f64> = shares.filter(|e| e.is_finite()).map(|e| e.max(0.0)).collect();
+    let mut s: Vec<f64> = shares
+        .filter(|e| e.is_finite())
+        .map(|e| e.max(0.0))
+        .collect();
     s.sort_by(f64::total_cmp);
     let allowed = budget * s.iter().sum::<f64>();
     let mut acc = 0.0;

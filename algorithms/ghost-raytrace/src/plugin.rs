@@ -1,7 +1,8 @@
 //! The ghost renderer as a plugin (ABI v1): the same [`crate::plan::plan`] and
 //! [`crate::ghosts::render`] the workbench calls directly, behind
 //! [`export_plugin!`](flarebench_sdk::export_plugin). Parameters: `quality` (the preset),
-//! `bands` (wavelength bands, 0 for the preset's), `grid_scale` (0 for the preset's).
+//! `bands` (wavelength bands, 0 for the preset's), `grid_scale` (0 for the preset's),
+//! `reflections` ("2": two-reflection ghosts, the default; "4": four-reflection ghosts too).
 
 use flarebench_sdk::LensSystem;
 use flarebench_sdk::abi::author::{
@@ -11,8 +12,10 @@ use flarebench_sdk::abi::author::{
 use crate::ghosts;
 use crate::plan::{self, PlanOptions};
 use crate::scene::{LightSpec, Quality};
+use flarebench_sdk::ghost::ReflectionOrder;
 
 const QUALITIES: &[&str] = &["fast", "default", "high"];
+const REFLECTIONS: &[&str] = &["2", "4"];
 
 /// The plugin: holds the lens between renders.
 #[derive(Debug, Default)]
@@ -46,6 +49,10 @@ pub fn plan_options(params: &Params<'_>) -> Result<PlanOptions<'static>, PluginE
     if scale > 0.0 {
         opts.grid_scale = scale;
     }
+    opts.reflections = match params.get_choice("reflections")? {
+        0 => ReflectionOrder::Two,
+        _ => ReflectionOrder::Four,
+    };
     Ok(opts)
 }
 
@@ -76,6 +83,12 @@ impl FlarePlugin for GhostRaytrace {
                     0.0,
                     16.0,
                     0.0,
+                ),
+                ParamSpec::choice(
+                    "reflections",
+                    "ghost paths: 2 (two reflections) or 4 (two and four reflections; four-reflection paths culled by an energy bound first)",
+                    REFLECTIONS,
+                    0,
                 ),
             ],
         }

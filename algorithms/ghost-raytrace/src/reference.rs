@@ -9,6 +9,7 @@
 
 use flarebench_sdk::LensSystem;
 use flarebench_sdk::aperture::Aperture;
+use flarebench_sdk::ghost::ReflectionOrder;
 use flarebench_sdk::ghost::render::Frame;
 use flarebench_sdk::ghost::table::fingerprint;
 use flarebench_sdk::image::HdrImage;
@@ -30,7 +31,7 @@ pub const REFERENCE_GRID_SCALE: f64 = 10.0;
 pub const REFERENCE_VERSION: u32 = 1;
 
 /// A text naming everything the reference image depends on: the renderer's version and
-/// settings, the lens (fingerprint of its canonical XML), the aperture, the frame and every
+/// settings, the reflection order, the lens (fingerprint of its canonical XML), the aperture, the frame and every
 /// light. Two scenes with the same key have the same reference; the workbench stores it with
 /// a saved reference (`render --reference-file`) and refuses a file whose key differs.
 pub fn reference_key(
@@ -38,10 +39,12 @@ pub fn reference_key(
     aperture: &Aperture,
     frame: &Frame,
     lights: &[LightSpec],
+    reflections: ReflectionOrder,
 ) -> String {
     use std::fmt::Write;
     let mut key = format!(
-        "flarebench-reference v{REFERENCE_VERSION} bands {REFERENCE_BANDS} grid x{REFERENCE_GRID_SCALE} min {REFERENCE_MIN_GRID}; lens {} {}; aperture {}; frame {}x{} px {}x{} mm",
+        "flarebench-reference v{REFERENCE_VERSION} bands {REFERENCE_BANDS} grid x{REFERENCE_GRID_SCALE} min {REFERENCE_MIN_GRID} reflections {}; lens {} {}; aperture {}; frame {}x{} px {}x{} mm",
+        reflections.count(),
         system.name,
         fingerprint(system),
         aperture_key(aperture),
@@ -87,6 +90,19 @@ pub fn reference_image(
     reference_image_with_density(system, aperture, frame, lights, 1.0)
 }
 
+/// The reference with the ghosts of `reflections` (every four-reflection ghost that has light
+/// too, for [`ReflectionOrder::Four`]: no energy bound, no culling).
+pub fn reference_image_of_order(
+    system: &LensSystem,
+    aperture: &Aperture,
+    frame: Frame,
+    lights: &[LightSpec],
+    reflections: ReflectionOrder,
+) -> Result<HdrImage, GhostRenderError> {
+    let plans = reference_plans_of_order(system, lights, &frame, 1.0, reflections)?;
+    Ok(ghosts::render(system, aperture, frame, &plans)?.0)
+}
+
 /// The reference with `density` times as many grid vertices a side (the convergence check).
 pub fn reference_image_with_density(
     system: &LensSystem,
@@ -106,6 +122,17 @@ pub fn reference_plans(
     frame: &Frame,
     density: f64,
 ) -> Result<Vec<LightPlan>, GhostRenderError> {
+    reference_plans_of_order(system, lights, frame, density, ReflectionOrder::Two)
+}
+
+/// [`reference_plans`] with the ghosts of `reflections`.
+pub fn reference_plans_of_order(
+    system: &LensSystem,
+    lights: &[LightSpec],
+    frame: &Frame,
+    density: f64,
+    reflections: ReflectionOrder,
+) -> Result<Vec<LightPlan>, GhostRenderError> {
     let opts = PlanOptions {
         quality: Quality::High,
         bands: REFERENCE_BANDS,
@@ -114,6 +141,7 @@ pub fn reference_plans(
         precomputed: None,
         all_bands: true,
         max_downscale: 1,
+        reflections,
     };
     let mut plans = plan::plan(system, lights, frame, &opts)?;
     let min_grid = (REFERENCE_MIN_GRID as f64 * density).round() as usize;

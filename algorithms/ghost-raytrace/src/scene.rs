@@ -168,6 +168,17 @@ impl Quality {
             Quality::High => 3e-4,
         }
     }
+
+    /// Four-reflection paths whose energy bound (of the direct image's energy) is below this
+    /// are left out before anything of theirs is traced (`ghost::bounds::energy_bound`). Two-
+    /// reflection ghosts are culled by [`Quality::dim_budget`] instead, once traced.
+    pub fn energy_threshold(self) -> f64 {
+        match self {
+            Quality::Fast => 1e-5,
+            Quality::Default => 1e-6,
+            Quality::High => 1e-8,
+        }
+    }
 }
 
 impl fmt::Display for Quality {

@@ -1,21 +1,180 @@
-//! Every two-reflection ghost path of a lens.
+//! Ghost paths of a lens: every two-reflection path, and on request every four-reflection one.
 
-use serde::{Deserialize, Serialize};
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use crate::spectrum::LAMBDA_D_NM;
 use crate::system::{LensSystem, SurfaceKind};
 
-/// A ghost: light reflects at `first` while travelling toward the sensor, then at `second`
-/// (an earlier surface) travelling back, then goes on to the sensor. `first > second`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+/// A ghost: the surfaces light reflects at, in the order it meets them, alternately while
+/// travelling toward the sensor and back toward the object.
+///
+/// - **Two reflections** ([`GhostPath::two`]): forward to `a`, reflect; back to `b < a`,
+///   reflect; forward to the sensor. Written `a-b`.
+/// - **Four reflections** ([`GhostPath::four`]): forward to `a`, reflect; back to `b < a`,
+///   reflect; forward to `c > b`, reflect; back to `d < c`, reflect; forward to the sensor.
+///   Written `a-b-c-d`.
+///
+/// The constructors do not check the order against a lens: `Sequence::ghost_path` does
+/// (`trace::PathError`). Small and `Copy`: four indices and a count; unused slots are 0.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct GhostPath {
-    pub first: usize,
-    pub second: usize,
+    surfaces: [usize; 4],
+    len: u8,
+}
+
+impl GhostPath {
+    /// Reflect at `first` going toward the sensor, then at `second` going back.
+    pub const fn two(first: usize, second: usize) -> Self {
+        GhostPath {
+            surfaces: [first, second, 0, 0],
+            len: 2,
+        }
+    }
+
+    /// Reflect at `a` (forward), `b` (back), `c` (forward), `d` (back), then on to the sensor.
+    pub const fn four(a: usize, b: usize, c: usize, d: usize) -> Self {
+        GhostPath {
+            surfaces: [a, b, c, d],
+            len: 4,
+        }
+    }
+
+    /// The reflecting surfaces in the order the light meets them (2 or 4 of them).
+    pub fn reflections(&self) -> &[usize] {
+        &self.surfaces[..self.len as usize]
+    }
+
+    /// Number of reflections: 2 or 4.
+    pub fn order(&self) -> usize {
+        self.len as usize
+    }
+
+    /// The first reflection (the latest surface of the first pair).
+    pub fn first(&self) -> usize {
+        self.surfaces[0]
+    }
+
+    /// The second reflection.
+    pub fn second(&self) -> usize {
+        self.surfaces[1]
+    }
+
+    /// True for a four-reflection path.
+    pub fn is_four(&self) -> bool {
+        self.len == 4
+    }
 }
 
 impl std::fmt::Display for GhostPath {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{}-{}", self.first, self.second)
+        let r = self.reflections();
+        write!(f, "{}-{}", r[0], r[1])?;
+        for s in &r[2..] {
+            write!(f, "-{s}")?;
+        }
+        Ok(())
+    }
+}
+
+/// Why a ghost path could not be read from text (`a-b` or `a-b-c-d`).
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("`{0}` is not a ghost path: write two or four surface indices, `a-b` or `a-b-c-d`")]
+pub struct ParseGhostPathError(pub String);
+
+impl std::str::FromStr for GhostPath {
+    type Err = ParseGhostPathError;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let err = || ParseGhostPathError(s.to_string());
+        let v: Vec<usize> = s
+            .split('-')
+            .map(|p| p.trim().parse::<usize>().map_err(|_| err()))
+            .collect::<Result<_, _>>()?;
+        match v[..] {
+            [a, b] => Ok(GhostPath::two(a, b)),
+            [a, b, c, d] => Ok(GhostPath::four(a, b, c, d)),
+            _ => Err(err()),
+        }
+    }
+}
+
+/// The stored form (the bounds table, docs/formats.md §10): `{"first":a,"second":b}` for two
+/// reflections, exactly as before four-reflection paths existed, and
+/// `{"first":a,"second":b,"third":c,"fourth":d}` for four.
+#[derive(Serialize, Deserialize)]
+struct StoredPath {
+    first: usize,
+    second: usize,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    third: Option<usize>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    fourth: Option<usize>,
+}
+
+impl Serialize for GhostPath {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let r = self.reflections();
+        StoredPath {
+            first: r[0],
+            second: r[1],
+            third: r.get(2).copied(),
+            fourth: r.get(3).copied(),
+        }
+        .serialize(s)
+    }
+}
+
+impl<'de> Deserialize<'de> for GhostPath {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let p = StoredPath::deserialize(d)?;
+        match (p.third, p.fourth) {
+            (None, None) => Ok(GhostPath::two(p.first, p.second)),
+            (Some(c), Some(d)) => Ok(GhostPath::four(p.first, p.second, c, d)),
+            _ => Err(serde::de::Error::custom(
+                "a ghost path has two reflections (first, second) or four (first to fourth)",
+            )),
+        }
+    }
+}
+
+/// Which ghosts to render: two-reflection paths only (the default), or two- and
+/// four-reflection paths.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum ReflectionOrder {
+    #[default]
+    #[serde(rename = "2")]
+    Two,
+    #[serde(rename = "4")]
+    Four,
+}
+
+impl ReflectionOrder {
+    /// 2 or 4.
+    pub fn count(self) -> usize {
+        match self {
+            ReflectionOrder::Two => 2,
+            ReflectionOrder::Four => 4,
+        }
+    }
+}
+
+impl std::fmt::Display for ReflectionOrder {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}", self.count())
+    }
+}
+
+impl std::str::FromStr for ReflectionOrder {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s.trim() {
+            "2" => Ok(ReflectionOrder::Two),
+            "4" => Ok(ReflectionOrder::Four),
+            _ => Err(format!(
+                "reflections must be 2 (two-reflection ghosts) or 4 (two- and four-reflection ghosts), got `{s}`"
+            )),
+        }
     }
 }
 
@@ -36,8 +195,108 @@ pub fn enumerate_ghosts(system: &LensSystem) -> Vec<GhostPath> {
     let mut out = Vec::with_capacity(r.len() * r.len().saturating_sub(1) / 2);
     for (a, &first) in r.iter().enumerate() {
         for &second in &r[..a] {
-            out.push(GhostPath { first, second });
+            out.push(GhostPath::two(first, second));
         }
     }
     out
+}
+
+/// Number of four-reflection paths over `n` reflecting surfaces:
+/// Σ over the second reflection's rank `b` of (n − 1 − b) choices of `a` times
+/// Σ_{c > b} c choices of (`c`, `d < c`). About n⁴/8 for large n.
+pub fn four_reflection_count(n: usize) -> usize {
+    (0..n)
+        .map(|b| (n - 1 - b) * ((b + 1)..n).sum::<usize>())
+        .sum()
+}
+
+/// Every four-reflection path over the reflecting surfaces (`a > b < c > d`; `c` may equal
+/// `a`, and `d` may equal `b` or lie before it), ordered by `a`, `b`, `c`, then `d`: there
+/// are [`four_reflection_count`] of them. Nothing is traced: cheap even for ~10⁵ paths.
+pub fn enumerate_four_reflection_ghosts(system: &LensSystem) -> Vec<GhostPath> {
+    let r = reflecting_surfaces(system);
+    let mut out = Vec::with_capacity(four_reflection_count(r.len()));
+    for (ia, &a) in r.iter().enumerate() {
+        for (ib, &b) in r[..ia].iter().enumerate() {
+            for (ic, &c) in r.iter().enumerate().skip(ib + 1) {
+                for &d in &r[..ic] {
+                    out.push(GhostPath::four(a, b, c, d));
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The paths of `order`: [`enumerate_ghosts`], followed for [`ReflectionOrder::Four`] by
+/// [`enumerate_four_reflection_ghosts`].
+pub fn enumerate_ghosts_of_order(system: &LensSystem, order: ReflectionOrder) -> Vec<GhostPath> {
+    let mut out = enumerate_ghosts(system);
+    if order == ReflectionOrder::Four {
+        out.extend(enumerate_four_reflection_ghosts(system));
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn text_round_trips_and_two_reflection_form_is_unchanged() {
+        let two = GhostPath::two(7, 2);
+        assert_eq!(two.to_string(), "7-2");
+        assert_eq!("7-2".parse::<GhostPath>().unwrap(), two);
+        let four = GhostPath::four(7, 2, 8, 0);
+        assert_eq!(four.to_string(), "7-2-8-0");
+        assert_eq!("7-2-8-0".parse::<GhostPath>().unwrap(), four);
+        assert_eq!(four.reflections(), &[7, 2, 8, 0]);
+        assert_eq!((four.first(), four.second()), (7, 2));
+        for bad in ["", "7", "7-2-8", "7-2-8-0-1", "a-b", "7--2"] {
+            assert!(bad.parse::<GhostPath>().is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn json_of_two_reflections_is_unchanged_and_four_round_trips() {
+        let two = GhostPath::two(2, 1);
+        assert_eq!(
+            serde_json::to_string(&two).unwrap(),
+            r#"{"first":2,"second":1}"#
+        );
+        let four = GhostPath::four(3, 1, 4, 0);
+        let text = serde_json::to_string(&four).unwrap();
+        assert_eq!(text, r#"{"first":3,"second":1,"third":4,"fourth":0}"#);
+        assert_eq!(serde_json::from_str::<GhostPath>(&text).unwrap(), four);
+        assert_eq!(
+            serde_json::from_str::<GhostPath>(r#"{"first":2,"second":1}"#).unwrap(),
+            two
+        );
+        assert!(serde_json::from_str::<GhostPath>(r#"{"first":3,"second":1,"third":4}"#).is_err());
+    }
+
+    #[test]
+    fn reflection_order_parses() {
+        assert_eq!("2".parse::<ReflectionOrder>(), Ok(ReflectionOrder::Two));
+        assert_eq!("4".parse::<ReflectionOrder>(), Ok(ReflectionOrder::Four));
+        assert!("3".parse::<ReflectionOrder>().is_err());
+        assert_eq!(ReflectionOrder::default(), ReflectionOrder::Two);
+    }
+
+    #[test]
+    fn four_reflection_count_matches_a_brute_force_count() {
+        for n in 0..9 {
+            let mut brute = 0;
+            for a in 0..n {
+                for b in 0..n {
+                    for c in 0..n {
+                        for d in 0..n {
+                            brute += usize::from(a > b && c > b && c > d);
+                        }
+                    }
+                }
+            }
+            assert_eq!(four_reflection_count(n), brute, "n = {n}");
+        }
+    }
 }

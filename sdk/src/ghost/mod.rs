@@ -1,10 +1,11 @@
-//! Ghosts (Hullin et al. 2011): light reflected twice inside the lens, traced as sparse ray
-//! grids from the entrance plane to the sensor.
+//! Ghosts (Hullin et al. 2011): light reflected twice (or, on request, four times) inside the
+//! lens, traced as sparse ray grids from the entrance plane to the sensor.
 //!
-//! - [`enumerate`]: every two-reflection path.
+//! - [`enumerate`]: every two-reflection path, and every four-reflection path.
 //! - [`grid`]: a grid of parallel rays traced along one ghost path at one wavelength.
 //! - [`bounds`]: where on the entrance plane the rays that reach the sensor start, per ghost
-//!   and incidence angle (approximate paraxial and precise traced modes).
+//!   and incidence angle (approximate paraxial and precise traced modes), and the cheap
+//!   energy bound that culls four-reflection paths before anything is traced.
 //! - [`render`]: one ghost into an HDR image — triangles with energy-conserving intensities,
 //!   the aperture's shape at the stop, feathered clipping, the diffraction-limit caustic bound.
 //! - [`table`]: bounds precomputed over a range of angles, stored and interpolated.
@@ -16,5 +17,8 @@ pub mod render;
 pub mod table;
 
 pub use bounds::{GhostBounds, Rect};
-pub use enumerate::{GhostPath, enumerate_ghosts, reflecting_surfaces};
+pub use enumerate::{
+    GhostPath, ParseGhostPathError, ReflectionOrder, enumerate_four_reflection_ghosts,
+    enumerate_ghosts, enumerate_ghosts_of_order, four_reflection_count, reflecting_surfaces,
+};
 pub use grid::{GridTrace, trace_grid, trace_grid_f64};

@@ -179,7 +179,7 @@ pub fn render_ghost(
     let aperture = ctx.aperture.sampler();
     let convex = aperture.is_convex();
     for band in bands {
-        let Ok(seq) = Sequence::ghost(ctx.system, band.lambda_nm, path.first, path.second) else {
+        let Ok(seq) = Sequence::ghost_path(ctx.system, band.lambda_nm, &path) else {
             return stats;
         };
         // The aperture's shape clips at the stop (from the recorded crossing), so the grid's

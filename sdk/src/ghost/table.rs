@@ -1,5 +1,10 @@
 //! Precomputed ghost bounds for a lens over a range of incidence angles (`flarebench
 //! precompute`), stored as JSON (format in docs/formats.md) and interpolated between angles.
+//!
+//! A table holds every two-reflection ghost and, when computed with
+//! [`ReflectionOrder::Four`], the four-reflection ghosts whose energy bound
+//! ([`bounds::energy_bound`]) reaches the table's `four_reflection_bound_threshold` at some
+//! tabulated angle; the others are never traced.
 
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -7,13 +12,19 @@ use serde::{Deserialize, Serialize};
 use crate::system::LensSystem;
 use crate::trace::InterfaceTableSet;
 
-use super::bounds::{self, BoundsMode, GhostBounds};
-use super::enumerate::{GhostPath, enumerate_ghosts};
+use super::bounds::{self, BoundsMode, GhostBounds, ReflectanceBounds};
+use super::enumerate::{
+    GhostPath, ReflectionOrder, enumerate_four_reflection_ghosts, enumerate_ghosts,
+};
 use super::grid::GridTrace;
 
 /// Identifies the file format.
 pub const FORMAT: &str = "flarebench-ghost-bounds";
+/// The version of a table of two-reflection ghosts (unchanged since the format began).
 pub const VERSION: u32 = 1;
+/// The version of a table computed with four-reflection ghosts: a reader of version 1 would
+/// misread their paths, so it must refuse them.
+pub const VERSION_FOUR: u32 = 2;
 
 /// Ghost bounds per ghost and angle.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -31,6 +42,31 @@ pub struct BoundsTable {
     pub ghosts: Vec<GhostPath>,
     /// `bounds[g][a]`: ghost `g` at angle `a`; `None` where no ray of it reaches the sensor.
     pub bounds: Vec<Vec<Option<GhostBounds>>>,
+    /// Set when four-reflection ghosts were considered: those whose energy bound is below
+    /// this at every tabulated angle are not in the table (version 2 files only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub four_reflection_bound_threshold: Option<f64>,
+    /// How many four-reflection paths the lens has (in the table or not; version 2 only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub four_reflection_paths: Option<usize>,
+}
+
+/// Which ghosts a table covers.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TableOptions {
+    pub reflections: ReflectionOrder,
+    /// Four-reflection ghosts whose energy bound stays below this at every angle are left out
+    /// (the default quality's culling threshold, 1e-6, is what `precompute` uses).
+    pub four_reflection_bound_threshold: f64,
+}
+
+impl Default for TableOptions {
+    fn default() -> Self {
+        TableOptions {
+            reflections: ReflectionOrder::Two,
+            four_reflection_bound_threshold: 1e-6,
+        }
+    }
 }
 
 /// FNV-1a (64 bit) of the lens's canonical XML, as hex.
@@ -51,8 +87,8 @@ pub fn angle_steps(max_deg: f64, step_deg: f64) -> Vec<f64> {
 }
 
 impl BoundsTable {
-    /// Computes the bounds of every ghost at every angle; `progress` is called once per ghost
-    /// finished (from worker threads).
+    /// Computes the bounds of every two-reflection ghost at every angle; `progress` is called
+    /// once per ghost finished (from worker threads).
     pub fn compute(
         system: &LensSystem,
         angles_deg: &[f64],
@@ -60,15 +96,63 @@ impl BoundsTable {
         wavelength_nm: f64,
         progress: &(dyn Fn() + Sync),
     ) -> BoundsTable {
-        let ghosts = enumerate_ghosts(system);
+        Self::compute_with(
+            system,
+            angles_deg,
+            mode,
+            wavelength_nm,
+            &TableOptions::default(),
+            &|_| {},
+            progress,
+        )
+    }
+
+    /// [`Self::compute`] for the ghosts `options` asks for. `start` is called once with the
+    /// number of ghosts that will be computed (after the four-reflection cull), then
+    /// `progress` once per ghost finished.
+    pub fn compute_with(
+        system: &LensSystem,
+        angles_deg: &[f64],
+        mode: BoundsMode,
+        wavelength_nm: f64,
+        options: &TableOptions,
+        start: &dyn Fn(usize),
+        progress: &(dyn Fn() + Sync),
+    ) -> BoundsTable {
+        let four = options.reflections == ReflectionOrder::Four;
+        let mut ghosts = enumerate_ghosts(system);
         let tables = InterfaceTableSet::for_system(system, wavelength_nm);
-        let direct: Vec<f64> = match mode {
-            BoundsMode::Precise => angles_deg
+        // The direct flux: for the precise energies, and for the four-reflection bound.
+        let direct: Vec<f64> = if mode == BoundsMode::Precise || four {
+            angles_deg
                 .par_iter()
                 .map_init(GridTrace::default, |scratch, &deg| {
                     bounds::direct_flux(system, &tables, deg.to_radians(), scratch)
                 })
-                .collect(),
+                .collect()
+        } else {
+            vec![0.0; angles_deg.len()]
+        };
+        let mut four_paths = None;
+        if four {
+            // The cull before tracing: a path stays when its bound reaches the threshold at
+            // some angle.
+            let reflectances = ReflectanceBounds::new(system, &tables);
+            let scale = angles_deg
+                .iter()
+                .zip(&direct)
+                .map(|(&deg, &d)| bounds::energy_bound_scale(system, deg.to_radians(), d))
+                .fold(0.0, f64::max);
+            let all = enumerate_four_reflection_ghosts(system);
+            four_paths = Some(all.len());
+            ghosts.extend(all.into_iter().filter(|p| {
+                bounds::energy_bound(&reflectances, p, scale)
+                    >= options.four_reflection_bound_threshold
+            }));
+        }
+        start(ghosts.len());
+        let direct_for_energy: Vec<f64> = match mode {
+            BoundsMode::Precise => direct,
             BoundsMode::Approximate => vec![0.0; angles_deg.len()],
         };
         // Ghosts in parallel; within a ghost, angles in order, each search starting from the
@@ -80,7 +164,7 @@ impl BoundsTable {
                 let seq = bounds::ghost_sequence(system, g, &tables);
                 let row: Vec<Option<GhostBounds>> = angles_deg
                     .iter()
-                    .zip(&direct)
+                    .zip(&direct_for_energy)
                     .map(|(&deg, &direct)| {
                         let theta = deg.to_radians();
                         let b = match mode {
@@ -102,7 +186,7 @@ impl BoundsTable {
             .collect();
         BoundsTable {
             format: FORMAT.to_string(),
-            version: VERSION,
+            version: if four { VERSION_FOUR } else { VERSION },
             lens: system.name.clone(),
             lens_fingerprint: fingerprint(system),
             mode,
@@ -110,14 +194,28 @@ impl BoundsTable {
             angles_deg: angles_deg.to_vec(),
             ghosts,
             bounds,
+            four_reflection_bound_threshold: four
+                .then_some(options.four_reflection_bound_threshold),
+            four_reflection_paths: four_paths,
         }
+    }
+
+    /// True when the table was computed with four-reflection ghosts (some may have been left
+    /// out by the bound: see `four_reflection_bound_threshold`).
+    pub fn has_four_reflections(&self) -> bool {
+        self.four_reflection_bound_threshold.is_some()
     }
 
     /// Checks that the table is of this format and for this lens.
     pub fn check_for(&self, system: &LensSystem) -> Result<(), String> {
-        if self.format != FORMAT || self.version != VERSION {
+        let known = match self.version {
+            VERSION => !self.has_four_reflections() && self.ghosts.iter().all(|g| !g.is_four()),
+            VERSION_FOUR => self.has_four_reflections(),
+            _ => false,
+        };
+        if self.format != FORMAT || !known {
             return Err(format!(
-                "not a {FORMAT} v{VERSION} file (format `{}`, version {})",
+                "not a {FORMAT} v{VERSION} or v{VERSION_FOUR} file (format `{}`, version {})",
                 self.format, self.version
             ));
         }

@@ -79,10 +79,7 @@ impl OlfGhostEntry {
     /// OpenLensFlare's element indices are our surface indices for lenses converted from its
     /// XML (same element list, stop and sensor included).
     pub fn path(&self) -> GhostPath {
-        GhostPath {
-            first: self.interfaces[0],
-            second: self.interfaces[1],
-        }
+        GhostPath::two(self.interfaces[0], self.interfaces[1])
     }
 
     /// True when OpenLensFlare found rays of this ghost on the sensor.

@@ -1,6 +1,7 @@
 //! Interaction sequences: which surfaces a ray meets, in what order, and how.
 
 use super::real::Real;
+use crate::ghost::GhostPath;
 use crate::system::{Coating, LensSystem, SurfaceKind};
 
 /// What happens at a step.
@@ -79,6 +80,14 @@ pub enum PathError {
         "a ghost reflects first at a later surface, then at an earlier one: got {first} then {second}"
     )]
     Order { first: usize, second: usize },
+    #[error(
+        "a four-reflection ghost reflects a third time at a later surface than the second: got {second} then {third}"
+    )]
+    ThirdOrder { second: usize, third: usize },
+    #[error(
+        "a four-reflection ghost reflects a fourth time at an earlier surface than the third: got {third} then {fourth}"
+    )]
+    FourthOrder { third: usize, fourth: usize },
     #[error("surface {0} is out of range")]
     OutOfRange(usize),
 }
@@ -183,28 +192,64 @@ impl Sequence<f64> {
     }
 
     /// A two-reflection ghost: forward to surface `first`, reflect; back to `second < first`,
-    /// reflect; forward to the sensor.
+    /// reflect; forward to the sensor. [`Self::ghost_path`] with [`GhostPath::two`].
     pub fn ghost(
         system: &LensSystem,
         lambda_nm: f64,
         first: usize,
         second: usize,
     ) -> Result<Self, PathError> {
+        Self::ghost_path(system, lambda_nm, &GhostPath::two(first, second))
+    }
+
+    /// The sequence of a ghost path of two or four reflections: forward to the first
+    /// reflection, back to the second, (forward to the third, back to the fourth,) then forward
+    /// to the sensor, refracting at every surface in between. Checks that every reflection is
+    /// at a refracting surface and the order `a > b` (`a > b < c > d`).
+    pub fn ghost_path(
+        system: &LensSystem,
+        lambda_nm: f64,
+        ghost: &GhostPath,
+    ) -> Result<Self, PathError> {
         let sensor = system.sensor_index();
-        for s in [first, second] {
+        let r = ghost.reflections();
+        for &s in r {
             if s >= sensor || system.surfaces[s].kind != SurfaceKind::Refracting {
                 return Err(PathError::NotReflecting(s));
             }
         }
-        if second >= first {
-            return Err(PathError::Order { first, second });
+        if r[1] >= r[0] {
+            return Err(PathError::Order {
+                first: r[0],
+                second: r[1],
+            });
         }
-        let mut path: Vec<(usize, Interaction)> =
-            (0..first).map(|s| (s, Interaction::Refract)).collect();
-        path.push((first, Interaction::Reflect));
-        path.extend((second + 1..first).rev().map(|s| (s, Interaction::Refract)));
-        path.push((second, Interaction::Reflect));
-        path.extend((second + 1..sensor).map(|s| (s, Interaction::Refract)));
+        if let [_, second, third, fourth] = *r {
+            if third <= second {
+                return Err(PathError::ThirdOrder { second, third });
+            }
+            if fourth >= third {
+                return Err(PathError::FourthOrder { third, fourth });
+            }
+        }
+        // From the entrance plane forward to the first reflection, then between reflections
+        // alternately back and forward, then forward from the last one to the sensor.
+        let mut path: Vec<(usize, Interaction)> = Vec::new();
+        let mut at: Option<usize> = None;
+        for (k, &s) in r.iter().enumerate() {
+            match at {
+                None => path.extend((0..s).map(|i| (i, Interaction::Refract))),
+                // Even k: travelling forward from the previous reflection.
+                Some(p) if k % 2 == 0 => {
+                    path.extend((p + 1..s).map(|i| (i, Interaction::Refract)));
+                }
+                Some(p) => path.extend((s + 1..p).rev().map(|i| (i, Interaction::Refract))),
+            }
+            path.push((s, Interaction::Reflect));
+            at = Some(s);
+        }
+        let last = at.expect("a path has reflections");
+        path.extend((last + 1..sensor).map(|s| (s, Interaction::Refract)));
         path.push((sensor, Interaction::Sensor));
         Ok(Self::build(system, lambda_nm, true, &path))
     }
@@ -296,7 +341,14 @@ impl Sequence<f64> {
             coatings,
             tables: Vec::new(),
         };
-        // Batches record where a ray crosses the stop on its last pass (the aperture mask's UV).
+        // Batches record where a ray crosses the stop on its last pass (the aperture mask's UV);
+        // every other pass clips at the stop's working radius (a circle), so the iris's shape
+        // is taken from the last pass. Ghosts of two and four reflections follow one rule, the
+        // last time the light goes through the iris before the sensor: on the final forward
+        // leg when the last reflection is in front of the stop; otherwise, for a > b < c > d,
+        // on the leg forward from `b` to `c` when only `b` is in front of it, and on the first
+        // leg (entrance to `a`) when every reflection is behind it — as for a two-reflection
+        // ghost behind the stop. `tests::stop_is_recorded_on_the_last_pass` checks each case.
         if let Some(stop) = system.stop_index()
             && let Some(last) = seq.steps.iter().rposition(|s| s.surface == stop)
         {
@@ -382,5 +434,172 @@ impl<T: Real> Sequence<T> {
     /// True when there are no steps.
     pub fn is_empty(&self) -> bool {
         self.steps.is_empty()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The Heliar-Tronnier: surfaces 0–4 in front of the stop (5), 6–8 behind it, sensor 9.
+    fn heliar() -> LensSystem {
+        let p =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../lenses/heliar-tronnier.xml");
+        crate::io::read_lens(&p).unwrap().system
+    }
+
+    fn reflections(seq: &Sequence<f64>) -> Vec<usize> {
+        seq.steps
+            .iter()
+            .filter(|s| s.interaction == Interaction::Reflect)
+            .map(|s| s.surface)
+            .collect()
+    }
+
+    #[test]
+    fn four_reflection_sequence_visits_every_surface_between_reflections() {
+        let sys = heliar();
+        let seq = Sequence::ghost_path(&sys, 550.0, &GhostPath::four(4, 1, 7, 2)).unwrap();
+        let got: Vec<(usize, Interaction)> = seq
+            .steps
+            .iter()
+            .map(|s| (s.surface, s.interaction))
+            .collect();
+        use Interaction::{Reflect as L, Refract as R, Sensor as S};
+        let want = vec![
+            (0, R),
+            (1, R),
+            (2, R),
+            (3, R),
+            (4, L),
+            (3, R),
+            (2, R),
+            (1, L),
+            (2, R),
+            (3, R),
+            (4, R),
+            (5, R),
+            (6, R),
+            (7, L),
+            (6, R),
+            (5, R),
+            (4, R),
+            (3, R),
+            (2, L),
+            (3, R),
+            (4, R),
+            (5, R),
+            (6, R),
+            (7, R),
+            (8, R),
+            (9, S),
+        ];
+        assert_eq!(got, want);
+        // Direction flips at each reflection.
+        let forward: Vec<bool> = seq.steps.iter().map(|s| s.forward).collect();
+        assert!(forward[..5].iter().all(|&f| f));
+        assert!(forward[5..8].iter().all(|&f| !f));
+        assert!(forward[8..14].iter().all(|&f| f));
+        assert!(forward[14..19].iter().all(|&f| !f));
+        assert!(forward[19..].iter().all(|&f| f));
+        // The two-reflection form is the same as before.
+        let two = Sequence::ghost(&sys, 550.0, 4, 1).unwrap();
+        assert_eq!(reflections(&two), vec![4, 1]);
+        assert_eq!(two.len(), 4 + 1 + 2 + 1 + 7 + 1);
+    }
+
+    #[test]
+    fn path_order_errors_are_typed() {
+        let sys = heliar();
+        let e = |p: GhostPath| Sequence::ghost_path(&sys, 550.0, &p).unwrap_err();
+        assert_eq!(
+            e(GhostPath::two(1, 4)),
+            PathError::Order {
+                first: 1,
+                second: 4
+            }
+        );
+        assert_eq!(
+            e(GhostPath::two(3, 3)),
+            PathError::Order {
+                first: 3,
+                second: 3
+            }
+        );
+        assert_eq!(
+            e(GhostPath::four(1, 4, 7, 2)),
+            PathError::Order {
+                first: 1,
+                second: 4
+            }
+        );
+        assert_eq!(
+            e(GhostPath::four(4, 2, 1, 0)),
+            PathError::ThirdOrder {
+                second: 2,
+                third: 1
+            }
+        );
+        assert_eq!(
+            e(GhostPath::four(4, 2, 2, 0)),
+            PathError::ThirdOrder {
+                second: 2,
+                third: 2
+            }
+        );
+        assert_eq!(
+            e(GhostPath::four(4, 1, 3, 6)),
+            PathError::FourthOrder {
+                third: 3,
+                fourth: 6
+            }
+        );
+        // The stop (5) and the sensor (9) do not reflect; 12 is past the sensor.
+        assert_eq!(e(GhostPath::four(7, 5, 8, 0)), PathError::NotReflecting(5));
+        assert_eq!(e(GhostPath::four(9, 1, 3, 0)), PathError::NotReflecting(9));
+        assert_eq!(e(GhostPath::two(12, 1)), PathError::NotReflecting(12));
+        // `c` may equal `a`, and `d` may equal `b` or lie before it.
+        assert!(Sequence::ghost_path(&sys, 550.0, &GhostPath::four(4, 1, 4, 1)).is_ok());
+        assert!(Sequence::ghost_path(&sys, 550.0, &GhostPath::four(4, 2, 3, 0)).is_ok());
+    }
+
+    #[test]
+    fn stop_is_recorded_on_the_last_pass() {
+        let sys = heliar();
+        let stop = sys.stop_index().unwrap();
+        assert_eq!(stop, 5);
+        // (path, reflections before the recorded pass)
+        let cases = [
+            // Last reflection in front of the stop: the final forward leg.
+            (GhostPath::two(4, 1), 2),
+            (GhostPath::two(7, 2), 2),
+            (GhostPath::four(4, 1, 3, 0), 4),
+            (GhostPath::four(8, 1, 7, 2), 4),
+            // Only `b` in front of it: the leg from `b` forward to `c`.
+            (GhostPath::four(7, 2, 8, 6), 2),
+            // Every reflection behind it: the first leg.
+            (GhostPath::two(8, 6), 0),
+            (GhostPath::four(8, 6, 8, 7), 0),
+        ];
+        for (path, before) in cases {
+            let seq = Sequence::ghost_path(&sys, 550.0, &path).unwrap();
+            let recorded: Vec<usize> = (0..seq.len())
+                .filter(|&i| seq.steps[i].record_stop)
+                .collect();
+            assert_eq!(recorded.len(), 1, "{path}");
+            let i = recorded[0];
+            assert_eq!(seq.steps[i].surface, stop, "{path}");
+            assert!(
+                seq.steps[i].forward,
+                "{path}: the last pass goes toward the sensor"
+            );
+            let last_stop = seq.steps.iter().rposition(|s| s.surface == stop).unwrap();
+            assert_eq!(i, last_stop, "{path}");
+            let reflected = seq.steps[..i]
+                .iter()
+                .filter(|s| s.interaction == Interaction::Reflect)
+                .count();
+            assert_eq!(reflected, before, "{path}");
+        }
     }
 }

@@ -10,9 +10,10 @@ use std::time::Instant;
 
 use clap::Args;
 use flarebench_sdk::aperture::Aperture;
+use flarebench_sdk::ghost::ReflectionOrder;
 use ghost_raytrace::ghosts;
 use ghost_raytrace::plan::{self, PlanOptions};
-use ghost_raytrace::reference::reference_image;
+use ghost_raytrace::reference::reference_image_of_order;
 use ghost_raytrace::scene::{LightSpec, Quality};
 use serde::Serialize;
 
@@ -37,6 +38,10 @@ pub struct BenchArgs {
     /// Largest coarse-frame factor (as `render --max-downscale`).
     #[arg(long, default_value_t = ghost_raytrace::plan::MAX_DOWNSCALE, value_parser = parse_downscale)]
     pub max_downscale: usize,
+    /// Ghost paths: 2 (two reflections) or 4 (two and four reflections), as `render
+    /// --reflections`; the reference then has the same paths.
+    #[arg(long, default_value_t = ReflectionOrder::Two)]
+    pub reflections: ReflectionOrder,
     /// Timed runs per lens and preset (the median is reported).
     #[arg(long, default_value_t = 5)]
     pub runs: usize,
@@ -56,6 +61,8 @@ pub struct BenchArgs {
 pub struct BenchRow {
     pub lens: String,
     pub quality: Quality,
+    /// Reflections per ghost path planned for (2, or 4 for two and four).
+    pub reflections: ReflectionOrder,
     pub width: usize,
     pub height: usize,
     pub ghosts_drawn: usize,
@@ -99,13 +106,20 @@ pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
                     error_frame.width, error_frame.height
                 );
             }
-            Some(reference_image(&sys, &aperture, error_frame, lights)?)
+            Some(reference_image_of_order(
+                &sys,
+                &aperture,
+                error_frame,
+                lights,
+                args.reflections,
+            )?)
         } else {
             None
         };
         for &q in &args.quality {
             let opts = PlanOptions {
                 max_downscale: args.max_downscale,
+                reflections: args.reflections,
                 ..PlanOptions::for_quality(q, None)
             };
             let (mut plan_ms, mut render_ms, mut frame_ms) = (vec![], vec![], vec![]);
@@ -136,6 +150,7 @@ pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
             rows.push(BenchRow {
                 lens: sys.name.clone(),
                 quality: q,
+                reflections: args.reflections,
                 width: frame.width,
                 height: frame.height,
                 ghosts_drawn: lp.ghosts.len(),
@@ -184,9 +199,14 @@ pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
     }
     print!("{}", t.render());
     println!(
-        "light {},{}; medians of {} runs on {} threads; errors against the reference{}",
+        "light {},{}{}; medians of {} runs on {} threads; errors against the reference{}",
         args.light.theta_deg,
         args.light.phi_deg,
+        if args.reflections == ReflectionOrder::Four {
+            "; two- and four-reflection ghosts"
+        } else {
+            ""
+        },
         args.runs,
         rayon::current_num_threads(),
         match args.error_size {

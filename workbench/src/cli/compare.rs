@@ -23,6 +23,7 @@ use crate::plugin_dirs;
 use crate::reference_file::{ReferenceSource, reference_for};
 use crate::report::ErrorReport;
 use crate::table::Table;
+use flarebench_sdk::ghost::ReflectionOrder;
 
 #[derive(Debug, Args)]
 pub struct CompareArgs {
@@ -280,7 +281,14 @@ pub fn run(args: &CompareArgs, quiet: bool) -> anyhow::Result<()> {
             eprintln!("rendering the reference …");
         }
         let t = Instant::now();
-        let (img, source) = reference_for(sys, &aperture, frame, &args.lights, file)?;
+        let (img, source) = reference_for(
+            sys,
+            &aperture,
+            frame,
+            &args.lights,
+            file,
+            ReflectionOrder::Two,
+        )?;
         if !quiet && !args.json && source != ReferenceSource::Rendered {
             eprintln!("reference {source}");
         }

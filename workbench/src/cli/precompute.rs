@@ -6,8 +6,9 @@ use std::time::Instant;
 
 use anyhow::Context;
 use clap::{Args, ValueEnum};
+use flarebench_sdk::ghost::ReflectionOrder;
 use flarebench_sdk::ghost::bounds::BoundsMode;
-use flarebench_sdk::ghost::table::{BoundsTable, angle_steps};
+use flarebench_sdk::ghost::table::{BoundsTable, TableOptions, angle_steps};
 use flarebench_sdk::paraxial::analyse;
 use flarebench_sdk::spectrum::LAMBDA_D_NM;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -37,6 +38,15 @@ pub struct PrecomputeArgs {
     /// Angle step (degrees), at most 0.5.
     #[arg(long, default_value_t = 0.5)]
     pub step_deg: f64,
+    /// Ghost paths: 2 (two reflections) or 4 (two and four reflections). With 4 the table
+    /// holds the four-reflection ghosts whose energy bound reaches --bound-threshold at some
+    /// angle; `render --reflections 4` traces any other it needs.
+    #[arg(long, default_value_t = ReflectionOrder::Two)]
+    pub reflections: ReflectionOrder,
+    /// With --reflections 4: leave out four-reflection ghosts whose energy bound is below
+    /// this at every angle (default: the default quality's culling threshold).
+    #[arg(long, default_value_t = 1e-6)]
+    pub bound_threshold: f64,
     /// Print a summary as JSON.
     #[arg(long)]
     pub json: bool,
@@ -65,6 +75,10 @@ pub fn run(args: &PrecomputeArgs, quiet: bool) -> anyhow::Result<()> {
         Mode::Approximate => BoundsMode::Approximate,
         Mode::Precise => BoundsMode::Precise,
     };
+    anyhow::ensure!(
+        args.bound_threshold >= 0.0,
+        "--bound-threshold must not be negative"
+    );
     let bar = if quiet || args.json {
         ProgressBar::hidden()
     } else {
@@ -78,7 +92,19 @@ pub fn run(args: &PrecomputeArgs, quiet: bool) -> anyhow::Result<()> {
     };
     bar.set_message(format!("precomputing {}", sys.name));
     let t = Instant::now();
-    let table = BoundsTable::compute(sys, &angles, mode, 550.0, &|| bar.inc(1));
+    let options = TableOptions {
+        reflections: args.reflections,
+        four_reflection_bound_threshold: args.bound_threshold,
+    };
+    let table = BoundsTable::compute_with(
+        sys,
+        &angles,
+        mode,
+        550.0,
+        &options,
+        &|n| bar.set_length(n as u64),
+        &|| bar.inc(1),
+    );
     let secs = t.elapsed().as_secs_f64();
     bar.finish_and_clear();
     let text = serde_json::to_string(&table)?;
@@ -97,6 +123,9 @@ pub fn run(args: &PrecomputeArgs, quiet: bool) -> anyhow::Result<()> {
                 "lens": sys.name, "output": args.output.display().to_string(),
                 "mode": mode, "angles": angles.len(), "max_angle_deg": max,
                 "ghosts": table.ghosts.len(), "entries_with_light": lit, "seconds": secs,
+                "reflections": args.reflections,
+                "four_reflection_paths": table.four_reflection_paths,
+                "four_reflection_ghosts": table.ghosts.iter().filter(|g| g.is_four()).count(),
             })
         );
     } else if !quiet {
@@ -106,6 +135,13 @@ pub fn run(args: &PrecomputeArgs, quiet: bool) -> anyhow::Result<()> {
             table.ghosts.len(),
             angles.len()
         );
+        if let Some(n) = table.four_reflection_paths {
+            eprintln!(
+                "  {} of {n} four-reflection ghosts kept (energy bound ≥ {:e} at some angle)",
+                table.ghosts.iter().filter(|g| g.is_four()).count(),
+                args.bound_threshold
+            );
+        }
     }
     Ok(())
 }

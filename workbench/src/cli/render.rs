@@ -21,6 +21,7 @@ use crate::lens_library;
 use crate::output::{ExrPrecision, ToneMap, ToneOperator, save_image_as};
 use crate::reference_file::{ReferenceSource, reference_for};
 use crate::report::{ErrorReport, LightReport, RenderReport, Timings};
+use flarebench_sdk::ghost::ReflectionOrder;
 use flarebench_sdk::ghost::table::BoundsTable;
 
 #[derive(Debug, Args)]
@@ -46,6 +47,10 @@ pub struct RenderArgs {
     /// Speed against accuracy: fast, default or high (docs/performance.md gives each one's error).
     #[arg(long, default_value_t = Quality::Default)]
     pub quality: Quality,
+    /// Ghost paths: 2 (two reflections) or 4 (two and four reflections; four-reflection paths
+    /// whose energy bound is under the quality's threshold are left out before tracing).
+    #[arg(long, default_value_t = ReflectionOrder::Two)]
+    pub reflections: ReflectionOrder,
     #[command(flatten)]
     pub iris: IrisArgs,
     /// Largest factor by which a large, smooth ghost may be drawn coarser than the output
@@ -318,6 +323,7 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
     let q = args.quality;
     let opts = PlanOptions {
         max_downscale: args.max_downscale,
+        reflections: args.reflections,
         ..PlanOptions::for_quality(q, table.as_ref())
     };
     let mode = args.starburst.starburst;
@@ -352,6 +358,7 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
             frame,
             &lights,
             args.reference_file.as_deref(),
+            args.reflections,
         )?;
         timings.reference_ms = Some(ms(t));
         if !quiet && !args.json && source != ReferenceSource::Rendered {

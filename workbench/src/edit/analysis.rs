@@ -115,7 +115,7 @@ pub fn ghost_rays(system: &LensSystem, ghost: GhostPath, analysis: &Analysis) ->
         return Vec::new();
     };
     let lambda = system.default_wavelength_nm();
-    let Ok(seq) = Sequence::ghost(system, lambda, ghost.first, ghost.second) else {
+    let Ok(seq) = Sequence::ghost_path(system, lambda, &ghost) else {
         return Vec::new();
     };
     let lead = -analysis.z_range.0;
