@@ -1,14 +1,19 @@
 //! Planning: for each light, which ghosts to trace and at how many wavelengths — and what is
 //! left out and how much energy that drops.
 //!
-//! A ghost is left out when its energy share (its flux over the direct image's, from its
-//! bounds) is under the quality's threshold, or when its sensor bounds miss the frame. With
+//! A ghost is left out when its sensor bounds miss the frame, or when it is among the
+//! dimmest on the frame that together carry at most the quality's budget of the ghosts'
+//! energy ([`dim_threshold`]; a ghost's energy share is its flux over the direct image's,
+//! from its bounds). With
 //! [`ReflectionOrder::Four`] the four-reflection ghosts come too, but first each is checked
 //! against a cheap upper bound on its energy share (`bounds::energy_bound`, no tracing): those
 //! whose bound is under the threshold are left out before anything is traced, reported with
-//! the bound as their energy share ([`DropReason::Bound`]). A ghost
-//! whose image moves less than half a pixel between the shortest and the longest wavelength
-//! band is traced once, with the bands' colours summed.
+//! the bound as their energy share ([`DropReason::Bound`]).
+//!
+//! Each ghost gets its own spectral sampling: `m` equal bins over 380–780 nm, each traced at
+//! its centre in the colour of its whole bin, with `m` as small as keeps neighbouring bins
+//! within half a drawn pixel of the ghost's (paraxial) dispersion and at most the plan's band
+//! count. A ghost whose image moves less than half a pixel over the spectrum is traced once.
 
 use flarebench_sdk::LensSystem;
 use flarebench_sdk::color::SpectralSampling;
@@ -484,6 +489,21 @@ fn dispersion_px(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_dim_threshold_drops_the_dimmest_within_the_budget() {
+        let t = |v: &[f64], b| dim_threshold(v.iter().copied(), b);
+        // 10 in all, 3 may go: 1 and 2 go, 3 stays.
+        assert_eq!(t(&[4.0, 1.0, 3.0, 2.0], 0.3), 3.0);
+        assert_eq!(t(&[4.0, 1.0, 3.0, 2.0], 0.0), 1.0);
+        // Ties go together or stay together.
+        assert_eq!(t(&[1.0, 1.0, 1.0, 7.0], 0.2), 1.0);
+        assert_eq!(t(&[1.0, 1.0, 1.0, 7.0], 0.3), 7.0);
+        // Dark ghosts always go; NaN is ignored; nothing to drop gives 0 to infinity.
+        assert_eq!(t(&[0.0, 0.0, 5.0, f64::NAN], 0.0), 5.0);
+        assert_eq!(t(&[], 0.5), f64::INFINITY);
+        assert_eq!(t(&[2.0], 1.0), f64::INFINITY);
+    }
 
     fn frame() -> Frame {
         // 1920 px over 36 mm: a pixel is 0.01875 mm.

@@ -72,7 +72,7 @@ impl FlarePlugin for GhostRaytrace {
                 ),
                 ParamSpec::int(
                     "bands",
-                    "wavelength bands traced (0: the preset's 3/7/15)",
+                    "wavelength bands traced (0: the preset's 7/31/31)",
                     0,
                     31,
                     0,
