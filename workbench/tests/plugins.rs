@@ -162,7 +162,7 @@ const SAME_STARBURST_TOL: f64 = 1e-6;
 #[test]
 fn the_starburst_plugin_renders_what_render_composes() {
     use flarebench::compose::{StarburstSetup, add_starbursts};
-    use flarebench_sdk::abi::author::{Scene, SceneLight};
+    use flarebench_sdk::abi::author::Scene;
     use flarebench_sdk::abi::host;
     use flarebench_sdk::abi::params::parse_values;
     use flarebench_sdk::aperture::Aperture;
@@ -216,15 +216,7 @@ fn the_starburst_plugin_renders_what_render_composes() {
     let mut inst = p.instantiate().unwrap();
     inst.prepare(&sys).unwrap();
     let scene = Scene {
-        lights: lights
-            .iter()
-            .map(|l| SceneLight {
-                theta_deg: l.theta_deg,
-                phi_deg: l.phi_deg,
-                intensity: l.intensity,
-                spectrum: l.spectrum,
-            })
-            .collect(),
+        lights: lights.iter().map(LightSpec::scene_light).collect(),
         frame,
         aperture,
     };
@@ -284,7 +276,7 @@ fn the_starburst_plugin_is_listed_and_runs_in_compare() {
 /// may differ between runs, hence a tolerance rather than equality).
 #[test]
 fn the_ghost_plugin_renders_what_the_library_renders() {
-    use flarebench_sdk::abi::author::{Scene, SceneLight};
+    use flarebench_sdk::abi::author::Scene;
     use flarebench_sdk::abi::host;
     use flarebench_sdk::abi::params::parse_values;
     use flarebench_sdk::aperture::Aperture;
@@ -321,15 +313,7 @@ fn the_ghost_plugin_renders_what_the_library_renders() {
     let mut inst = p.instantiate().unwrap();
     inst.prepare(&sys).unwrap();
     let scene = Scene {
-        lights: lights
-            .iter()
-            .map(|l| SceneLight {
-                theta_deg: l.theta_deg,
-                phi_deg: l.phi_deg,
-                intensity: l.intensity,
-                spectrum: l.spectrum,
-            })
-            .collect(),
+        lights: lights.iter().map(LightSpec::scene_light).collect(),
         frame,
         aperture,
     };

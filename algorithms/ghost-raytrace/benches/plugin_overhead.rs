@@ -13,7 +13,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use flarebench_sdk::abi::author::{Scene, SceneLight};
+use flarebench_sdk::abi::author::Scene;
 use flarebench_sdk::abi::host;
 use flarebench_sdk::abi::params::parse_values;
 use flarebench_sdk::aperture::Aperture;
@@ -54,12 +54,7 @@ fn bench(c: &mut Criterion) {
     inst.prepare(&sys).unwrap();
     let values = parse_values(&plugin.params, "quality=fast").unwrap();
     let scene = Scene {
-        lights: vec![SceneLight {
-            theta_deg: light.theta_deg,
-            phi_deg: light.phi_deg,
-            intensity: light.intensity,
-            spectrum: light.spectrum,
-        }],
+        lights: vec![light.scene_light()],
         frame,
         aperture: aperture.clone(),
     };
@@ -146,12 +141,7 @@ fn paired(
     inst.prepare(sys).unwrap();
     let values = parse_values(&plugin.params, &format!("quality={}", quality.name())).unwrap();
     let scene = Scene {
-        lights: vec![SceneLight {
-            theta_deg: light.theta_deg,
-            phi_deg: light.phi_deg,
-            intensity: light.intensity,
-            spectrum: light.spectrum,
-        }],
+        lights: vec![light.scene_light()],
         frame,
         aperture: aperture.clone(),
     };

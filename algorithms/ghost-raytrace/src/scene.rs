@@ -95,6 +95,18 @@ impl LightSpec {
     }
 }
 
+impl LightSpec {
+    /// The light as a plugin scene takes it (the inverse of [`crate::plugin::light_specs`]).
+    pub fn scene_light(&self) -> flarebench_sdk::abi::author::SceneLight {
+        flarebench_sdk::abi::author::SceneLight {
+            theta_deg: self.theta_deg,
+            phi_deg: self.phi_deg,
+            intensity: self.intensity,
+            spectrum: self.spectrum,
+        }
+    }
+}
+
 impl FromStr for LightSpec {
     type Err = LightSpecError;
     fn from_str(s: &str) -> Result<Self, Self::Err> {

@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use anyhow::{Context, bail};
 use clap::Args;
-use flarebench_sdk::abi::author::{Scene, SceneLight};
+use flarebench_sdk::abi::author::Scene;
 use flarebench_sdk::abi::host::LoadedPlugin;
 use flarebench_sdk::abi::params::parse_values;
 use flarebench_sdk::ghost::render::Frame;
@@ -259,16 +259,7 @@ pub fn run(args: &CompareArgs, quiet: bool) -> anyhow::Result<()> {
     };
     let aperture = args.iris.aperture()?;
     let scene = Scene {
-        lights: args
-            .lights
-            .iter()
-            .map(|l| SceneLight {
-                theta_deg: l.theta_deg,
-                phi_deg: l.phi_deg,
-                intensity: l.intensity,
-                spectrum: l.spectrum,
-            })
-            .collect(),
+        lights: args.lights.iter().map(LightSpec::scene_light).collect(),
         frame,
         aperture: aperture.clone(),
     };
