@@ -40,8 +40,9 @@ pub const BOUNDS_LAMBDA_NM: f64 = 550.0;
 #[derive(Debug)]
 pub struct LightPlan {
     pub light: LightSpec,
-    /// Every band traced: first the `sampled` bands of the light's spectral sampling, then
-    /// the bins of the coarser samplings some ghosts are traced at ([`GhostJob::bands`]).
+    /// Every wavelength some ghost is traced at (the bins of the light's spectral sampling
+    /// and of the coarser ones ghosts take, [`GhostJob::bands`]), with its interface tables.
+    /// Their `rgb` is zero: a ghost's colour at each band is its [`GhostBand::rgb`].
     pub bands: Vec<Band>,
     /// Bands of the light's own spectral sampling (the plan's band count).
     pub sampled: usize,
@@ -220,12 +221,6 @@ pub fn plan(
         .iter()
         .map(|light| {
             let sampling = SpectralSampling::new(bands, light.spectrum)?;
-            let band_list: Vec<Band> = sampling
-                .wavelengths_nm()
-                .iter()
-                .zip(sampling.weights())
-                .map(|(&l, &rgb)| Band::new(system, l, rgb.map(|c| c * light.intensity as f32)))
-                .collect();
             let colours = GhostColours::new(system, light.spectrum, light.intensity as f32)?;
             let theta = light.theta_deg.to_radians();
             let phi = light.phi_deg.to_radians();
@@ -303,11 +298,10 @@ pub fn plan(
                 sampling.wavelengths_nm()[0],
                 sampling.wavelengths_nm()[bands - 1],
             );
-            let mut band_list = band_list;
-            // (m, i) → index into `band_list` of bin i of an m-band sampling; the light's own
-            // sampling is there from the start, coarser ones are added as ghosts need them.
-            let mut band_index: HashMap<(usize, usize), usize> =
-                (0..bands).map(|k| ((bands, k), k)).collect();
+            // (m, i) → index into `lambdas` (and then the plan's bands) of bin i of an m-band
+            // sampling: only the bins some ghost is traced at get a band.
+            let mut lambdas: Vec<f64> = Vec::new();
+            let mut band_index: HashMap<(usize, usize), usize> = HashMap::new();
             let on_frame = |b: &GhostBounds| overlaps_frame(&b.sensor.rotated(phi), frame);
             let dim_below = if cull {
                 dim_threshold(
@@ -371,9 +365,8 @@ pub fn plan(
                 let ghost_bands = (0..groups)
                     .map(|i| {
                         let band = *band_index.entry((groups, i)).or_insert_with(|| {
-                            let (_, _, lambda) = bin(groups, i);
-                            band_list.push(Band::new(system, lambda, [0.0; 3]));
-                            band_list.len() - 1
+                            lambdas.push(bin(groups, i).2);
+                            lambdas.len() - 1
                         });
                         GhostBand {
                             band,
@@ -393,7 +386,11 @@ pub fn plan(
             dropped.extend(bounded_out);
             Ok(LightPlan {
                 light: light.clone(),
-                bands: band_list,
+                // Each band's interface tables, built in parallel.
+                bands: lambdas
+                    .par_iter()
+                    .map(|&l| Band::new(system, l, [0.0; 3]))
+                    .collect(),
                 sampled: bands,
                 ghosts,
                 dropped,

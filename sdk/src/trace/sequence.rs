@@ -125,26 +125,26 @@ impl InterfaceTableSet {
             } else {
                 (s.n_to, s.n_from)
             };
-            let table = |forward: bool, reflect: bool| {
+            // Transmittance and reflectance tables for one direction, from one evaluation
+            // of the coating per entry.
+            let tables_for = |forward: bool| {
                 let (n1, n2) = if forward {
                     (n_before, n_after)
                 } else {
                     (n_after, n_before)
                 };
-                let mut values = [0.0; TABLE_LEN];
-                for (j, v) in values.iter_mut().enumerate() {
+                let mut t = [0.0; TABLE_LEN];
+                let mut r = [0.0; TABLE_LEN];
+                for (j, (t, r)) in t.iter_mut().zip(&mut r).enumerate() {
                     let cos = j as f64 / (TABLE_LEN - 1) as f64;
-                    let r = coating.reflectance(n1, n2, cos, lambda_nm, forward);
-                    *v = if reflect { r } else { 1.0 - r };
+                    *r = coating.reflectance(n1, n2, cos, lambda_nm, forward);
+                    *t = 1.0 - *r;
                 }
-                InterfaceTable { values }
+                (InterfaceTable { values: t }, InterfaceTable { values: r })
             };
-            tables[s.surface] = Some(Box::new([
-                table(true, false),
-                table(true, true),
-                table(false, false),
-                table(false, true),
-            ]));
+            let (forward_t, forward_r) = tables_for(true);
+            let (backward_t, backward_r) = tables_for(false);
+            tables[s.surface] = Some(Box::new([forward_t, forward_r, backward_t, backward_r]));
         }
         InterfaceTableSet { lambda_nm, tables }
     }
