@@ -72,7 +72,12 @@ fn main() {
                     j.bands.len(),
                     j.downscale
                 );
-                (ghosts::render(&sys, &aperture, frame, &alone(tp, k)).unwrap().0, what)
+                (
+                    ghosts::render(&sys, &aperture, frame, &alone(tp, k))
+                        .unwrap()
+                        .0,
+                    what,
+                )
             }
             None => {
                 let why = tp
