@@ -59,7 +59,7 @@ fn the_example_plugin_library_loads_and_describes_itself() {
     let p = host::load(&plugin_library("example_glow")).unwrap();
     assert_eq!(p.name, "example-glow");
     assert_eq!(p.kind, PluginKind::Other);
-    assert_eq!((p.abi_major, p.abi_minor), (1, 0));
+    assert_eq!((p.abi_major, p.abi_minor), (1, 1));
     assert!(p.rustc_version.starts_with("rustc "), "{}", p.rustc_version);
     let names: Vec<&str> = p.params.iter().map(|q| q.name.as_str()).collect();
     assert_eq!(names, ["sigma_px", "gain"]);

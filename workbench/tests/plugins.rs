@@ -36,7 +36,7 @@ fn plugins_list_shows_the_plugins_beside_the_binary_with_their_parameters() {
         .expect("ghost-raytrace is listed");
     assert_eq!(g["status"], "ok");
     assert_eq!(g["kind"], "ghosts");
-    assert_eq!(g["abi"], "1.0");
+    assert_eq!(g["abi"], "1.1");
     let q = &g["params"][0];
     assert_eq!(q["name"], "quality");
     assert_eq!(q["type"], "choice");
