@@ -9,7 +9,7 @@ use std::process::Command;
 use flarebench_sdk::abi::author::{PluginKind, Scene, SceneLight};
 use flarebench_sdk::abi::host::{self, LoadedPlugin, PluginCallError, PluginLoadError};
 use flarebench_sdk::abi::params::{ParamKind, defaults, parse_values};
-use flarebench_sdk::aperture::Aperture;
+use flarebench_sdk::aperture::{Aperture, ApertureMask};
 use flarebench_sdk::color::LightSpectrum;
 use flarebench_sdk::ghost::render::Frame;
 use flarebench_sdk::paraxial::analyse;
@@ -59,7 +59,7 @@ fn the_example_plugin_library_loads_and_describes_itself() {
     let p = host::load(&plugin_library("example_glow")).unwrap();
     assert_eq!(p.name, "example-glow");
     assert_eq!(p.kind, PluginKind::Other);
-    assert_eq!((p.abi_major, p.abi_minor), (1, 0));
+    assert_eq!((p.abi_major, p.abi_minor), (1, 1));
     assert!(p.rustc_version.starts_with("rustc "), "{}", p.rustc_version);
     let names: Vec<&str> = p.params.iter().map(|q| q.name.as_str()).collect();
     assert_eq!(names, ["sigma_px", "gain"]);
@@ -239,6 +239,52 @@ fn out_of_range_values_are_refused_by_the_plugin_side_too() {
     assert!(e.to_string().contains("1 parameter values for 3"), "{e}");
 }
 
+/// A 16 × 16 mask: a disc of radius 6 texels, open inside.
+fn disc_mask() -> Aperture {
+    let luma: Vec<u8> = (0..256)
+        .map(|k| {
+            let (x, y) = ((k % 16) as f64 - 7.5, (k / 16) as f64 - 7.5);
+            if x * x + y * y < 36.0 { 255 } else { 0 }
+        })
+        .collect();
+    Aperture::Mask(ApertureMask::from_luma(16, 16, &luma).unwrap())
+}
+
+#[test]
+fn an_abi_1_1_plugin_takes_a_mask_and_rgb_and_flat_lights() {
+    let p = faulty();
+    assert_eq!(p.abi_minor, 1);
+    let mut inst = p.instantiate().unwrap();
+    inst.prepare(&load_lens("heliar-tronnier")).unwrap();
+    let mut s = scene(8, 8, 36.0, 1.0, 0.0);
+    s.aperture = disc_mask();
+    s.lights[0].spectrum = LightSpectrum::Rgb([1.0, 0.5, 0.2]);
+    s.lights.push(SceneLight {
+        spectrum: LightSpectrum::Flat,
+        ..s.lights[0].clone()
+    });
+    let out = inst.render(&s, &values(&p, "level=0.5")).unwrap();
+    assert_eq!(out.image.sum(), [32.0; 3]);
+}
+
+#[test]
+fn a_bad_light_colour_is_refused_by_the_plugin_side_and_the_instance_keeps_working() {
+    let p = faulty();
+    let mut inst = p.instantiate().unwrap();
+    inst.prepare(&load_lens("heliar-tronnier")).unwrap();
+    let mut s = scene(8, 8, 36.0, 1.0, 0.0);
+    // The host sends what it is given; the thunk checks it.
+    s.lights[0].spectrum = LightSpectrum::Rgb([f32::NAN, 0.5, 0.2]);
+    let e = inst.render(&s, &values(&p, "")).unwrap_err();
+    assert!(
+        matches!(e, PluginCallError::InvalidArgument { call: "render", .. }),
+        "{e:?}"
+    );
+    assert!(e.to_string().contains("light 0: light colour"), "{e}");
+    s.lights[0].spectrum = LightSpectrum::Rgb([0.2, 0.5, 1.0]);
+    assert!(inst.render(&s, &values(&p, "")).is_ok());
+}
+
 /// Compiles `tests/plugins/misfit.rs` as a shared library with `rustc` (it has no
 /// dependencies), with `variant` set and the panic strategy given.
 fn misfit(variant: Option<&str>, panic: &str) -> PathBuf {
@@ -311,6 +357,56 @@ fn hand_written_headers_load_or_fail_with_the_reason() {
     let e = host::load(&misfit(None, "abort")).unwrap_err();
     assert!(matches!(e, PluginLoadError::PanicAbort { .. }), "{e:?}");
     assert!(e.to_string().contains("panic = \"unwind\""), "{e}");
+}
+
+#[test]
+fn an_abi_1_0_plugin_is_refused_a_mask_or_an_rgb_light_and_still_renders_the_rest() {
+    // misfit's header says ABI 1.0: it knows neither the mask nor light_ext.
+    let p = host::load(&misfit(None, "unwind")).unwrap();
+    assert_eq!((p.abi_major, p.abi_minor), (1, 0));
+    let mut inst = p.instantiate().unwrap();
+    inst.prepare(&load_lens("heliar-tronnier")).unwrap();
+    let circle = scene(8, 8, 36.0, 1.0, 0.0);
+
+    let mut masked = circle.clone();
+    masked.aperture = disc_mask();
+    let e = inst.render(&masked, &[]).unwrap_err();
+    assert!(matches!(e, PluginCallError::Unsupported { .. }), "{e:?}");
+    assert_eq!(
+        e.to_string(),
+        "plugin `misfit`: an aperture mask image needs plugin ABI 1.1, but the plugin was \
+         built for ABI 1.0 (sdk hand-written); rebuild it against this sdk"
+    );
+
+    let mut coloured = circle.clone();
+    coloured.lights.push(SceneLight {
+        spectrum: LightSpectrum::Rgb([1.0, 0.5, 0.2]),
+        ..coloured.lights[0].clone()
+    });
+    let e = inst.render(&coloured, &[]).unwrap_err();
+    assert!(matches!(e, PluginCallError::Unsupported { .. }), "{e:?}");
+    let text = e.to_string();
+    assert!(
+        text.contains("light 1's spectrum Rgb([1.0, 0.5, 0.2]) needs plugin ABI 1.1")
+            && text.contains("built for ABI 1.0"),
+        "{text}"
+    );
+    coloured.lights[1].spectrum = LightSpectrum::Flat;
+    assert!(matches!(
+        inst.render(&coloured, &[]),
+        Err(PluginCallError::Unsupported { .. })
+    ));
+
+    // What 1.0 can say still goes through: a circle, an iris, D65 and blackbody lights.
+    assert!(inst.render(&circle, &[]).is_ok());
+    let mut iris = circle.clone();
+    iris.aperture = Aperture::Iris {
+        blades: 6,
+        rotation_rad: 0.0,
+        roundness: 0.0,
+    };
+    iris.lights[0].spectrum = LightSpectrum::Blackbody { kelvin: 3200.0 };
+    assert!(inst.render(&iris, &[]).is_ok());
 }
 
 #[test]

@@ -29,7 +29,7 @@ mod mask;
 #[cfg(test)]
 mod tests;
 
-pub use mask::{ApertureMask, OLF_DISTANCE_CLIP};
+pub use mask::{ApertureMask, MAX_MASK_TEXELS, OLF_DISTANCE_CLIP, check_mask_size};
 
 use iris::IrisGeometry;
 
@@ -185,7 +185,7 @@ impl Aperture {
         height: usize,
         overlay: Option<&ApertureMask>,
     ) -> Result<ApertureMask, ApertureError> {
-        mask::check_size(width, height)?;
+        check_mask_size(width, height)?;
         let sampler = self.sampler();
         let (du, dv) = (2.0 / width as f64, 2.0 / height as f64);
         let feather = du.max(dv) as f32;

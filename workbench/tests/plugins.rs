@@ -36,7 +36,7 @@ fn plugins_list_shows_the_plugins_beside_the_binary_with_their_parameters() {
         .expect("ghost-raytrace is listed");
     assert_eq!(g["status"], "ok");
     assert_eq!(g["kind"], "ghosts");
-    assert_eq!(g["abi"], "1.0");
+    assert_eq!(g["abi"], "1.1");
     let q = &g["params"][0];
     assert_eq!(q["name"], "quality");
     assert_eq!(q["type"], "choice");
@@ -330,4 +330,122 @@ fn the_ghost_plugin_renders_what_the_library_renders() {
             "{c:?}"
         );
     }
+}
+
+/// ABI 1.1: an aperture mask (the bundled `lenses/masks/aperture.bmp`, read as `render` reads
+/// masks) and an RGB light cross the boundary, and the ghost plugin renders what the library
+/// renders with them (the tolerance of the test above).
+#[test]
+fn the_ghost_plugin_renders_a_mask_aperture_and_an_rgb_light_as_the_library_does() {
+    use flarebench::aperture_file::{MaskEncoding, load_aperture_mask};
+    use flarebench_sdk::abi::author::{Scene, SceneLight};
+    use flarebench_sdk::abi::host;
+    use flarebench_sdk::abi::params::parse_values;
+    use flarebench_sdk::aperture::Aperture;
+    use flarebench_sdk::color::LightSpectrum;
+    use flarebench_sdk::ghost::render::Frame;
+    use ghost_raytrace::plan::{self, PlanOptions};
+    use ghost_raytrace::scene::{LightSpec, Quality};
+
+    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
+    let sys = flarebench_sdk::io::read_lens(&Path::new(root).join("lenses/heliar-tronnier.xml"))
+        .unwrap()
+        .system;
+    let mask = load_aperture_mask(
+        &Path::new(root).join("lenses/masks/aperture.bmp"),
+        MaskEncoding::Transmission,
+    )
+    .unwrap()
+    .mask;
+    let frame = Frame {
+        width: 240,
+        height: 135,
+        film_width_mm: sys.film_width_mm,
+        film_height_mm: sys.film_width_mm * 135.0 / 240.0,
+    };
+    let lights: Vec<LightSpec> = ["10,30,1,1:0.5:0.2", "4,-120,2.5,3200"]
+        .iter()
+        .map(|s| LightSpec::parse(s).unwrap())
+        .collect();
+    assert_eq!(lights[0].spectrum, LightSpectrum::Rgb([1.0, 0.5, 0.2]));
+    let opts = PlanOptions::for_quality(Quality::Fast, None);
+    let plans = plan::plan(&sys, &lights, &frame, &opts).unwrap();
+    let scene_with = |aperture: Aperture, lights: &[LightSpec]| Scene {
+        lights: lights
+            .iter()
+            .map(|l| SceneLight {
+                theta_deg: l.theta_deg,
+                phi_deg: l.phi_deg,
+                intensity: l.intensity,
+                spectrum: l.spectrum,
+            })
+            .collect(),
+        frame,
+        aperture,
+    };
+
+    let p = host::load(&beside_binary("ghost_raytrace")).unwrap();
+    assert_eq!(p.abi_minor, 1);
+    let mut inst = p.instantiate().unwrap();
+    inst.prepare(&sys).unwrap();
+    let values = parse_values(&p.params, "quality=fast").unwrap();
+    let aperture = Aperture::Mask(mask);
+    let (expected, _) = ghost_raytrace::ghosts::render(&sys, &aperture, frame, &plans).unwrap();
+    let out = inst
+        .render(&scene_with(aperture.clone(), &lights), &values)
+        .unwrap();
+    let drawn: usize = plans.iter().map(|p| p.ghosts.len()).sum();
+    assert_eq!(out.items_drawn as usize, drawn);
+    let c = out.image.compare(&expected).unwrap();
+    assert!(
+        c.relative_rmse < 1e-5 && c.energy_error.abs() < 1e-5,
+        "{c:?}"
+    );
+
+    // The test can fail: had the mask or the colour been lost on the way (a circle, a white
+    // light), the image would be another one.
+    let (circle, _) =
+        ghost_raytrace::ghosts::render(&sys, &Aperture::Circular, frame, &plans).unwrap();
+    let c = circle.compare(&expected).unwrap();
+    assert!(c.relative_rmse > 1e-2, "{c:?}");
+    let mut white = lights.clone();
+    white[0].spectrum = LightSpectrum::D65;
+    let plans_white = plan::plan(&sys, &white, &frame, &opts).unwrap();
+    let (white_img, _) =
+        ghost_raytrace::ghosts::render(&sys, &aperture, frame, &plans_white).unwrap();
+    let c = white_img.compare(&expected).unwrap();
+    assert!(c.relative_rmse > 1e-2, "{c:?}");
+}
+
+#[test]
+fn compare_runs_the_ghost_plugin_with_an_rgb_light() {
+    beside_binary("ghost_raytrace");
+    let dir = temp_dir("compare-rgb");
+    let out_png = dir.join("cmp.png");
+    let out = flarebench(&[
+        "compare",
+        "heliar-tronnier",
+        "--light",
+        "10,30,1,1:0.5:0.2",
+        "--algo",
+        "ghost-raytrace:quality=fast",
+        "--size",
+        "64x36",
+        "--runs",
+        "1",
+        "--no-reference",
+        "--json",
+        "-o",
+        out_png.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let a = &v["algorithms"][0];
+    assert!(a["failure"].is_null(), "{}", a["failure"]);
+    assert!(a["items_drawn"].as_u64().unwrap() > 0, "{a}");
+    assert!(out_png.is_file());
 }

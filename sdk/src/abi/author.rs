@@ -203,7 +203,7 @@ pub struct SceneLight {
     pub phi_deg: f64,
     /// Irradiance perpendicular to the beam (image units per mm² of entrance pupil).
     pub intensity: f64,
-    /// Daylight D65 or a blackbody.
+    /// Any [`LightSpectrum`]: D65 or a blackbody (ABI 1.0), linear sRGB or flat (since 1.1).
     pub spectrum: LightSpectrum,
 }
 
@@ -213,7 +213,7 @@ pub struct Scene {
     pub lights: Vec<SceneLight>,
     /// Output size and the part of the sensor it shows.
     pub frame: Frame,
-    /// The stop's shape (circle or iris in ABI v1).
+    /// The stop's shape: circle or iris (ABI 1.0), or a mask image (since 1.1).
     pub aperture: Aperture,
 }
 

@@ -8,6 +8,12 @@
 //! (a panic in them would end the host; with `unwind` the export thunks catch it). Libraries are
 //! never unloaded: a plugin's code and static data stay valid for the life of the process.
 //!
+//! Minor versions: the host always sends the scene of its own minor (a plugin reads the fields
+//! its `struct_size` check says it knows), but a scene that needs a newer minor than the
+//! plugin's header states — an aperture mask or a light spectrum other than D65 and blackbody
+//! need 1.1 — is refused here with [`PluginCallError::Unsupported`], naming the plugin and its
+//! minor, instead of being sent to a plugin that would misread it.
+//!
 //! What this cannot protect against: a plugin is native code in the host's process, so one that
 //! writes through wild pointers or calls `abort` can still take the host down. Everything a
 //! well-formed plugin can do wrong — report an error, panic, return NaN or an ill-formed mesh,
@@ -28,8 +34,9 @@ use super::author::{PluginKind, Scene};
 use super::export::read_str;
 use super::params::{ParamInfo, ParamKind};
 use super::v1::{
-    self, ABI_MAJOR, AbiStr, ENTRY_SYMBOL, EntryFn, ErrorBuf, ImageBuffer, LensInput, LightInput,
-    MAGIC, MeshBuffer, MeshVertex, PluginHeader, RenderOutput, SceneInput, status,
+    self, ABI_MAJOR, AbiStr, ENTRY_SYMBOL, EntryFn, ErrorBuf, ImageBuffer, KELVIN_SEE_EXT,
+    LensInput, LightExt, LightInput, MAGIC, MeshBuffer, MeshVertex, PluginHeader, RenderOutput,
+    SceneInput, light_spectrum, status,
 };
 
 /// Capacity of the error message buffer handed to every call (bytes).
@@ -126,7 +133,8 @@ pub enum PluginCallError {
     /// The instance panicked before.
     #[error("plugin `{plugin}`: this instance panicked earlier and cannot be used again")]
     Poisoned { plugin: String },
-    /// The scene cannot be expressed in ABI v1.
+    /// The scene cannot be expressed in ABI v1, or not in the minor version the plugin was
+    /// built for (an aperture mask or an RGB light for a 1.0 plugin).
     #[error("plugin `{plugin}`: {reason}")]
     Unsupported { plugin: String, reason: String },
 }
@@ -529,7 +537,9 @@ impl PluginInstance<'_> {
 
     /// Renders `scene` with parameter `values` (one per [`LoadedPlugin::params`], e.g. from
     /// [`super::params::parse_values`]); checks the image for NaN and infinity and
-    /// rasterizes the mesh, if any, into it.
+    /// rasterizes the mesh, if any, into it. A scene with an aperture mask or a light
+    /// spectrum other than D65 and blackbody needs a plugin of ABI 1.1 or later: a 1.0 plugin
+    /// gets [`PluginCallError::Unsupported`] instead (module docs).
     pub fn render(
         &mut self,
         scene: &Scene,
@@ -558,44 +568,76 @@ impl PluginInstance<'_> {
     ) -> Result<RenderStats, PluginCallError> {
         self.usable()?;
         let name = || self.plugin.name.clone();
-        let aperture = match &scene.aperture {
-            Aperture::Circular => v1::ApertureInput {
-                kind: v1::aperture_kind::CIRCULAR,
-                blades: 0,
-                rotation_rad: 0.0,
-                roundness: 0.0,
-            },
+        let minor = self.plugin.abi_minor;
+        // What only ABI 1.1 can say: refused for a 1.0 plugin, which would misread it.
+        let needs_1_1 = |what: String| {
+            if minor >= 1 {
+                return Ok(());
+            }
+            Err(PluginCallError::Unsupported {
+                plugin: name(),
+                reason: format!(
+                    "{what} needs plugin ABI {ABI_MAJOR}.1, but the plugin was built for ABI \
+                     {ABI_MAJOR}.{minor} (sdk {}); rebuild it against this sdk",
+                    self.plugin.sdk_version
+                ),
+            })
+        };
+        let too_large = |what: &str| PluginCallError::Unsupported {
+            plugin: name(),
+            reason: format!("{what} too large"),
+        };
+        let (aperture, mask) = match &scene.aperture {
+            Aperture::Circular => (
+                v1::ApertureInput {
+                    kind: v1::aperture_kind::CIRCULAR,
+                    blades: 0,
+                    rotation_rad: 0.0,
+                    roundness: 0.0,
+                },
+                None,
+            ),
             &Aperture::Iris {
                 blades,
                 rotation_rad,
                 roundness,
-            } => v1::ApertureInput {
-                kind: v1::aperture_kind::IRIS,
-                blades,
-                rotation_rad,
-                roundness,
-            },
-            Aperture::Mask(_) => {
-                return Err(PluginCallError::Unsupported {
-                    plugin: name(),
-                    reason: "aperture mask images do not travel in plugin ABI 1.0".into(),
-                });
+            } => (
+                v1::ApertureInput {
+                    kind: v1::aperture_kind::IRIS,
+                    blades,
+                    rotation_rad,
+                    roundness,
+                },
+                None,
+            ),
+            Aperture::Mask(m) => {
+                needs_1_1("an aperture mask image".into())?;
+                let (Ok(w), Ok(h)) = (u32::try_from(m.width()), u32::try_from(m.height())) else {
+                    return Err(too_large("aperture mask"));
+                };
+                let input = v1::ApertureInput {
+                    kind: v1::aperture_kind::MASK,
+                    blades: 0,
+                    rotation_rad: 0.0,
+                    roundness: 0.0,
+                };
+                (input, Some((w, h, m.data().as_ptr())))
             }
         };
         let mut lights = Vec::with_capacity(scene.lights.len());
-        for l in &scene.lights {
-            let kelvin = match l.spectrum {
-                LightSpectrum::D65 => 0.0,
-                LightSpectrum::Blackbody { kelvin } => kelvin,
-                ref other => {
-                    return Err(PluginCallError::Unsupported {
-                        plugin: name(),
-                        reason: format!(
-                            "light spectrum {other:?} does not travel in plugin ABI 1.0"
-                        ),
-                    });
-                }
+        let mut exts = Vec::with_capacity(scene.lights.len());
+        for (i, l) in scene.lights.iter().enumerate() {
+            let (kelvin, ext) = match l.spectrum {
+                LightSpectrum::D65 => (0.0, None),
+                LightSpectrum::Blackbody { kelvin } => (kelvin, None),
+                LightSpectrum::Rgb(rgb) => (KELVIN_SEE_EXT, Some((light_spectrum::RGB, rgb))),
+                LightSpectrum::Flat => (KELVIN_SEE_EXT, Some((light_spectrum::FLAT, [0.0; 3]))),
             };
+            if ext.is_some() {
+                needs_1_1(format!("light {i}'s spectrum {:?}", l.spectrum))?;
+            }
+            let (spectrum, rgb) = ext.unwrap_or((light_spectrum::KELVIN, [0.0; 3]));
+            exts.push(LightExt { spectrum, rgb });
             lights.push(LightInput {
                 theta_deg: l.theta_deg,
                 phi_deg: l.phi_deg,
@@ -603,17 +645,21 @@ impl PluginInstance<'_> {
                 kelvin,
             });
         }
+        // Only when some light needs it: a scene 1.0 could say stays as 1.0 said it.
+        let light_ext = if exts.iter().any(|e| e.spectrum != light_spectrum::KELVIN) {
+            exts.as_ptr()
+        } else {
+            std::ptr::null()
+        };
         let f = scene.frame;
         let (Ok(width), Ok(height), Ok(light_count)) = (
             u32::try_from(f.width),
             u32::try_from(f.height),
             u32::try_from(lights.len()),
         ) else {
-            return Err(PluginCallError::Unsupported {
-                plugin: name(),
-                reason: "frame or light count too large".into(),
-            });
+            return Err(too_large("frame or light count"));
         };
+        let (mask_width, mask_height, mask) = mask.unwrap_or((0, 0, std::ptr::null()));
         let input = SceneInput {
             struct_size: size_of::<SceneInput>() as u32,
             light_count,
@@ -623,6 +669,10 @@ impl PluginInstance<'_> {
             film_width_mm: f.film_width_mm,
             film_height_mm: f.film_height_mm,
             aperture,
+            mask_width,
+            mask_height,
+            mask,
+            light_ext,
         };
         loop {
             image.width = f.width;
@@ -664,8 +714,9 @@ impl PluginInstance<'_> {
                 });
             };
             // SAFETY: `render` comes from a checked header; the instance is live; the scene,
-            // lights, values, image, mesh buffers (with the capacities stated) and the error
-            // buffer are valid and outlive the call; nothing else accesses them meanwhile.
+            // lights, light extensions, mask (borrowed from `scene`), values, image, mesh
+            // buffers (with the capacities stated) and the error buffer are valid and outlive
+            // the call; nothing else accesses them meanwhile.
             let code = unsafe {
                 (self.plugin.functions.render)(
                     self.ptr,

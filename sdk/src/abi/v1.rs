@@ -7,6 +7,23 @@
 //! ([`PluginHeader`], [`SceneInput`]); anything else is a new major version. The layout of every
 //! type here is snapshot-tested (`sdk/tests/abi_layout.rs`), so an accidental change fails.
 //!
+//! Minor versions, both ways: a receiver reads an appended field only when the sender's
+//! `struct_size` covers it (a shorter struct from an older sender means the older meaning),
+//! and accepts a longer struct from a newer sender, ignoring what it does not know. The host
+//! knows the plugin's minor from its header and refuses — with
+//! `PluginCallError::Unsupported`, naming the plugin and its minor — to send a scene the
+//! plugin's minor cannot express, rather than send one it would misread.
+//!
+//! - **1.0**: lights (D65 or blackbody), frame, circular or iris aperture.
+//! - **1.1** appends to [`SceneInput`] an aperture mask image (`mask_width`, `mask_height`,
+//!   `mask`, with [`aperture_kind::MASK`]) and `light_ext`, a parallel array of
+//!   [`LightExt`] giving a light a spectrum that `kelvin` cannot say ([`light_spectrum`]:
+//!   linear sRGB or equal energy). [`LightInput`] itself is unchanged — it is an array element,
+//!   whose size no minor version may change; such a light's `kelvin` is
+//!   [`KELVIN_SEE_EXT`] (negative), which a 1.0 reader refuses instead of rendering the light
+//!   as daylight. [`LightExt`] has no `struct_size` either: a later minor that needs more per
+//!   light appends another parallel array to [`SceneInput`].
+//!
 //! Ownership: the plugin owns its header, descriptors and instance (freed only by its
 //! `destroy`); the host owns every input and every output buffer (the image, the mesh buffers
 //! and the error message buffer) and the plugin only writes into them during a call.
@@ -24,8 +41,9 @@ use std::ffi::c_void;
 pub const MAGIC: [u8; 8] = *b"FLAREPLG";
 /// ABI major version: a plugin with another major is refused.
 pub const ABI_MAJOR: u32 = 1;
-/// ABI minor version: fields appended to [`PluginHeader`] or [`SceneInput`] since 1.0.
-pub const ABI_MINOR: u32 = 0;
+/// ABI minor version: fields appended to [`PluginHeader`] or [`SceneInput`] since 1.0 (module
+/// docs: 1.1 added the aperture mask and the light spectrum extension).
+pub const ABI_MINOR: u32 = 1;
 /// Name of the one exported entry symbol, of type [`EntryFn`].
 pub const ENTRY_SYMBOL: &str = "flarebench_plugin_v1";
 /// The sdk version a plugin was built against (diagnostics only).
@@ -82,7 +100,29 @@ pub mod aperture_kind {
     pub const CIRCULAR: u32 = 0;
     /// An iris of `blades` blades (`crate::aperture::Aperture::Iris`).
     pub const IRIS: u32 = 1;
+    /// Since 1.1: a transmission image over [-1, 1]² (`crate::aperture::ApertureMask`), in
+    /// [`super::SceneInput::mask`]. A 1.0 plugin refuses the kind as unknown.
+    pub const MASK: u32 = 2;
 }
+
+/// Since 1.1: a light's spectrum (`u32` in [`LightExt::spectrum`]).
+pub mod light_spectrum {
+    /// As [`super::LightInput::kelvin`] says: D65 daylight for 0, else a blackbody (the only
+    /// spectra of 1.0; what a light without an extension has).
+    pub const KELVIN: u32 = 0;
+    /// A linear sRGB colour, [`super::LightExt::rgb`]: finite, non-negative components with a
+    /// positive luminance, made a smooth spectrum by the sdk
+    /// (`crate::color::LightSpectrum::Rgb`).
+    pub const RGB: u32 = 1;
+    /// Equal energy at every wavelength (CIE illuminant E, `crate::color::LightSpectrum::Flat`).
+    pub const FLAT: u32 = 2;
+}
+
+/// Since 1.1: [`LightInput::kelvin`] of a light whose spectrum its [`LightExt`] gives
+/// ([`light_spectrum::RGB`], [`light_spectrum::FLAT`]; a reader requires it negative for
+/// those, and zero or positive otherwise). Negative, so that a reader that does not know
+/// `light_ext` (a 1.0 plugin) refuses the light rather than renders it as D65.
+pub const KELVIN_SEE_EXT: f64 = -1.0;
 
 /// A borrowed UTF-8 string: `len` bytes at `ptr` (null only when `len` is 0). Not
 /// NUL-terminated.
@@ -218,8 +258,20 @@ pub struct LightInput {
     pub phi_deg: f64,
     /// Irradiance perpendicular to the beam (image units per mm² of entrance pupil).
     pub intensity: f64,
-    /// Blackbody temperature (K); 0 for daylight D65.
+    /// Blackbody temperature (K); 0 for daylight D65; since 1.1, [`KELVIN_SEE_EXT`] when the
+    /// light's [`LightExt`] gives its spectrum.
     pub kelvin: f64,
+}
+
+/// Since 1.1: what a light carries beyond [`LightInput`], in an array parallel to
+/// [`SceneInput::lights`] ([`SceneInput::light_ext`]). Its size is fixed for ABI 1.x.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightExt {
+    /// A [`light_spectrum`] constant.
+    pub spectrum: u32,
+    /// Linear sRGB colour for [`light_spectrum::RGB`]; ignored otherwise (zero).
+    pub rgb: [f32; 3],
 }
 
 /// The stop's shape.
@@ -235,7 +287,9 @@ pub struct ApertureInput {
     pub roundness: f64,
 }
 
-/// What to render: lights, frame and aperture.
+/// What to render: lights, frame and aperture; since 1.1 also an aperture mask and light
+/// spectra. A receiver reads the 1.1 fields only when `struct_size` covers them
+/// ([`SceneInput::SIZE_1_0`] is the size of a 1.0 scene, which has none of them).
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct SceneInput {
@@ -249,6 +303,21 @@ pub struct SceneInput {
     pub film_width_mm: f64,
     pub film_height_mm: f64,
     pub aperture: ApertureInput,
+    // ABI 1.1 (the 1.0 struct ended here).
+    /// The mask of an [`aperture_kind::MASK`] aperture: `mask_width × mask_height`
+    /// transmissions in 0..=1, row-major, row 0 at v = +1 (`crate::aperture::ApertureMask`),
+    /// at most [`crate::aperture::MAX_MASK_TEXELS`]. 0, 0 and null for any other kind.
+    pub mask_width: u32,
+    pub mask_height: u32,
+    pub mask: *const f32,
+    /// `light_count` [`LightExt`]s, one per light, in order; null when every light's spectrum
+    /// is what its `kelvin` says (D65 or a blackbody).
+    pub light_ext: *const LightExt,
+}
+
+impl SceneInput {
+    /// `struct_size` of an ABI 1.0 scene: everything up to and including `aperture`.
+    pub const SIZE_1_0: usize = std::mem::offset_of!(SceneInput, mask_width);
 }
 
 /// A host-allocated linear HDR image: `width × height` pixels of 3 `f32` (linear sRGB),

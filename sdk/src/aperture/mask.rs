@@ -18,7 +18,7 @@
 use super::ApertureError;
 
 /// Masks larger than this many texels are refused (two f32 fields of 2²⁶ texels: 512 MiB).
-const MAX_TEXELS: usize = 1 << 26;
+pub const MAX_MASK_TEXELS: usize = 1 << 26;
 
 /// Distances are clamped to ±this: larger than anything inside the square (its diagonal is
 /// 2√2), so only a mask with no open texel reaches it.
@@ -44,23 +44,24 @@ pub struct ApertureMask {
     distance: Vec<f32>,
 }
 
-/// Checks a mask size: both sides positive, at most [`MAX_TEXELS`] texels.
-pub(super) fn check_size(width: usize, height: usize) -> Result<usize, ApertureError> {
+/// Checks a mask size: both sides positive, at most [`MAX_MASK_TEXELS`] texels; the texel
+/// count.
+pub fn check_mask_size(width: usize, height: usize) -> Result<usize, ApertureError> {
     if width == 0 || height == 0 {
         return Err(ApertureError::EmptyMask { width, height });
     }
     match width.checked_mul(height) {
-        Some(n) if n <= MAX_TEXELS => Ok(n),
+        Some(n) if n <= MAX_MASK_TEXELS => Ok(n),
         _ => Err(ApertureError::MaskTooLarge {
             width,
             height,
-            max: MAX_TEXELS,
+            max: MAX_MASK_TEXELS,
         }),
     }
 }
 
 fn check_len(width: usize, height: usize, got: usize) -> Result<(), ApertureError> {
-    let expected = check_size(width, height)?;
+    let expected = check_mask_size(width, height)?;
     if got != expected {
         return Err(ApertureError::MaskLength {
             width,

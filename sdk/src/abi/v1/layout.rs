@@ -77,6 +77,7 @@ pub fn describe() -> String {
             kelvin
         }
     );
+    describe!(out, LightExt { spectrum, rgb });
     describe!(
         out,
         ApertureInput {
@@ -96,7 +97,11 @@ pub fn describe() -> String {
             height,
             film_width_mm,
             film_height_mm,
-            aperture
+            aperture,
+            mask_width,
+            mask_height,
+            mask,
+            light_ext
         }
     );
     describe!(
