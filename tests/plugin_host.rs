@@ -287,10 +287,19 @@ fn a_bad_light_colour_is_refused_by_the_plugin_side_and_the_instance_keeps_worki
 
 /// Compiles `tests/plugins/misfit.rs` as a shared library with `rustc` (it has no
 /// dependencies), with `variant` set and the panic strategy given.
+///
+/// Each variant is compiled once per test process, under a lock, into a folder of its own:
+/// tests run in parallel, and two rustc runs writing the same variant's object files (or one
+/// overwriting a library another test has loaded) would break each other.
 fn misfit(variant: Option<&str>, panic: &str) -> PathBuf {
-    let dir = build_dir().join("misfit-plugins");
-    std::fs::create_dir_all(&dir).unwrap();
+    static BUILT: std::sync::Mutex<Vec<(String, PathBuf)>> = std::sync::Mutex::new(Vec::new());
     let stem = format!("misfit_{}_{panic}", variant.unwrap_or("ok"));
+    let mut built = BUILT.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some((_, path)) = built.iter().find(|(s, _)| *s == stem) {
+        return path.clone();
+    }
+    let dir = build_dir().join("misfit-plugins").join(&stem);
+    std::fs::create_dir_all(&dir).unwrap();
     let out = dir.join(format!(
         "{}{stem}{}",
         std::env::consts::DLL_PREFIX,
@@ -315,6 +324,7 @@ fn misfit(variant: Option<&str>, panic: &str) -> PathBuf {
     }
     let o = cmd.output().expect("rustc runs");
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    built.push((stem, out.clone()));
     out
 }
 
