@@ -432,3 +432,51 @@ fn precomputed_four_reflection_tables() {
     );
     assert!((a / b - 1.0).abs() < 0.05, "image energy {a} vs {b}");
 }
+
+/// `--aperture-mask`: the octagon of `lenses/masks/aperture.bmp` (open area 2.984 against the
+/// circle's π) dims the ghosts by about its area, and OpenLensFlare's distance map of the same
+/// octagon gives the same image.
+#[test]
+fn an_aperture_mask_shapes_the_ghosts() {
+    let dir = temp_dir("render-mask");
+    let out = dir.join("m.exr");
+    let sum = |mask: Option<&str>| -> f64 {
+        let mut args = vec![
+            "render",
+            "heliar-tronnier",
+            "--light",
+            "5,30",
+            "--size",
+            "192x108",
+            "--starburst",
+            "off",
+            "-o",
+            out.to_str().unwrap(),
+            "--json",
+        ];
+        if let Some(m) = mask {
+            args.extend(["--aperture-mask", m]);
+        }
+        let v = json(&args);
+        v["image_sum_rgb"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|c| c.as_f64().unwrap())
+            .sum()
+    };
+    let lenses = concat!(env!("CARGO_MANIFEST_DIR"), "/../lenses/masks/");
+    let circle = sum(None);
+    let octagon = sum(Some(&format!("{lenses}aperture.bmp")));
+    let distance_map = sum(Some(&format!("{lenses}apertureDist.bmp")));
+    let ratio = octagon / circle;
+    assert!(
+        (0.85..0.99).contains(&ratio),
+        "octagon / circle energy {ratio} (areas: {})",
+        2.984 / std::f64::consts::PI
+    );
+    assert!(
+        ((distance_map - octagon) / octagon).abs() < 0.01,
+        "{distance_map} vs {octagon}"
+    );
+}

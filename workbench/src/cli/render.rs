@@ -153,11 +153,21 @@ pub struct IrisArgs {
     /// Blade roundness, 0 (straight) to 1 (a circle).
     #[arg(long, default_value_t = 0.0)]
     pub iris_roundness: f64,
+    /// The stop's shape as an image (BMP or PNG over [-1, 1]², white open; an OpenLensFlare
+    /// distance map such as `lenses/masks/apertureDist.bmp` is recognised): used by the ghosts
+    /// and the starburst instead of the iris.
+    #[arg(long, value_name = "IMAGE", conflicts_with = "iris_blades")]
+    pub aperture_mask: Option<PathBuf>,
 }
 
 impl IrisArgs {
-    /// The aperture: a circle without blades, else the iris; checked.
+    /// The aperture: the mask image if given, else a circle without blades, else the iris;
+    /// checked.
     pub fn aperture(&self) -> anyhow::Result<Aperture> {
+        if let Some(path) = &self.aperture_mask {
+            let mask = load_aperture_mask(path, MaskEncoding::Auto)?.mask;
+            return Ok(Aperture::Mask(mask));
+        }
         let aperture = if self.iris_blades == 0 {
             Aperture::Circular
         } else {
