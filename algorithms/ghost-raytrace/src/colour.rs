@@ -86,13 +86,11 @@ impl GhostColours {
         })
     }
 
-    /// The colour of bin `i` of `m` equal bins over 380–780 nm (the bins of an `m`-band
-    /// [`SpectralSampling`]), relative to the throughput at the bin's centre, where the ghost
-    /// is traced. For `m` equal to the light's band count it is that band's colour.
-    pub fn bin_colour(&self, system: &LensSystem, path: GhostPath, m: usize, i: usize) -> [f32; 3] {
-        let (lo, hi, centre) = bin(m, i);
-        let t_band = path_throughput(path, &surface_factors(system, centre), self.sensor);
-        let last = i + 1 >= m;
+    /// The colour of `bin` for `path`, relative to the throughput at the bin's centre, where
+    /// the ghost is traced.
+    pub fn bin_colour(&self, path: GhostPath, bin: &Bin) -> [f32; 3] {
+        let t_band = path_throughput(path, &bin.factors, self.sensor);
+        let (lo, hi, last) = (bin.lo_nm, bin.hi_nm, bin.last);
         self.sum(path, t_band, |l| l >= lo && (l < hi || last))
     }
 
@@ -113,15 +111,33 @@ impl GhostColours {
     }
 }
 
-/// Bin `i` of `m` equal bins over the sampled range: its edges and centre (nm), the centre
-/// computed as `SpectralSampling::new(m, …)` computes its wavelengths.
-pub fn bin(m: usize, i: usize) -> (f64, f64, f64) {
-    let width = (SAMPLING_MAX_NM - SAMPLING_MIN_NM) / m.max(1) as f64;
-    (
-        SAMPLING_MIN_NM + width * i as f64,
-        SAMPLING_MIN_NM + width * (i + 1) as f64,
-        SAMPLING_MIN_NM + (i as f64 + 0.5) * width,
-    )
+/// Bin `i` of `m` equal bins over 380–780 nm (the bins of an `m`-band [`SpectralSampling`]),
+/// with the lens's surface factors at its centre: made once per bin and shared by every
+/// ghost traced there.
+#[derive(Clone, Debug)]
+pub struct Bin {
+    pub lo_nm: f64,
+    pub hi_nm: f64,
+    /// The centre, computed as `SpectralSampling::new(m, …)` computes its wavelengths.
+    pub centre_nm: f64,
+    /// The last bin includes its upper edge.
+    last: bool,
+    factors: Vec<[f64; 4]>,
+}
+
+impl Bin {
+    /// Bin `i` of `m` for `system`.
+    pub fn new(system: &LensSystem, m: usize, i: usize) -> Bin {
+        let width = (SAMPLING_MAX_NM - SAMPLING_MIN_NM) / m.max(1) as f64;
+        let centre_nm = SAMPLING_MIN_NM + (i as f64 + 0.5) * width;
+        Bin {
+            lo_nm: SAMPLING_MIN_NM + width * i as f64,
+            hi_nm: SAMPLING_MIN_NM + width * (i + 1) as f64,
+            centre_nm,
+            last: i + 1 >= m,
+            factors: surface_factors(system, centre_nm),
+        }
+    }
 }
 
 #[cfg(test)]
@@ -144,14 +160,16 @@ mod tests {
         );
         let path = GhostPath::two(2, 1);
         let c = GhostColours::new(&sys, LightSpectrum::D65, 1.0).unwrap();
-        let bands: Vec<[f32; 3]> = (0..3).map(|i| c.bin_colour(&sys, path, 3, i)).collect();
+        let bands: Vec<[f32; 3]> = (0..3)
+            .map(|i| c.bin_colour(path, &Bin::new(&sys, 3, i)))
+            .collect();
         let total: [f32; 3] = bands
             .iter()
             .fold([0.0; 3], |a, b| [a[0] + b[0], a[1] + b[1], a[2] + b[2]]);
         for ch in total {
             assert!((ch - 1.0).abs() < 1e-3, "{total:?}");
         }
-        let m = c.bin_colour(&sys, path, 1, 0);
+        let m = c.bin_colour(path, &Bin::new(&sys, 1, 0));
         assert!(
             (0..3).all(|i| (m[i] - total[i]).abs() < 1e-5),
             "{m:?} vs {total:?}"
@@ -164,7 +182,7 @@ mod tests {
             };
         }
         let c = GhostColours::new(&sys, LightSpectrum::D65, 1.0).unwrap();
-        let m = c.bin_colour(&sys, path, 1, 0);
+        let m = c.bin_colour(path, &Bin::new(&sys, 1, 0));
         assert!(m[2] > m[0] && m[2] > 1.0, "{m:?}");
     }
 }

@@ -30,7 +30,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::GhostRenderError;
-use crate::colour::{GhostColours, bin};
+use crate::colour::{Bin, GhostColours};
 use crate::scene::{LightSpec, Quality};
 
 /// Wavelength at which bounds and energies are found (nm).
@@ -298,9 +298,9 @@ pub fn plan(
                 sampling.wavelengths_nm()[0],
                 sampling.wavelengths_nm()[bands - 1],
             );
-            // (m, i) → index into `lambdas` (and then the plan's bands) of bin i of an m-band
+            // (m, i) → index into `bins` (and then the plan's bands) of bin i of an m-band
             // sampling: only the bins some ghost is traced at get a band.
-            let mut lambdas: Vec<f64> = Vec::new();
+            let mut bins: Vec<Bin> = Vec::new();
             let mut band_index: HashMap<(usize, usize), usize> = HashMap::new();
             let on_frame = |b: &GhostBounds| overlaps_frame(&b.sensor.rotated(phi), frame);
             let dim_below = if cull {
@@ -365,12 +365,12 @@ pub fn plan(
                 let ghost_bands = (0..groups)
                     .map(|i| {
                         let band = *band_index.entry((groups, i)).or_insert_with(|| {
-                            lambdas.push(bin(groups, i).2);
-                            lambdas.len() - 1
+                            bins.push(Bin::new(system, groups, i));
+                            bins.len() - 1
                         });
                         GhostBand {
                             band,
-                            rgb: colours.bin_colour(system, path, groups, i),
+                            rgb: colours.bin_colour(path, &bins[band]),
                         }
                     })
                     .collect();
@@ -387,9 +387,9 @@ pub fn plan(
             Ok(LightPlan {
                 light: light.clone(),
                 // Each band's interface tables, built in parallel.
-                bands: lambdas
+                bands: bins
                     .par_iter()
-                    .map(|&l| Band::new(system, l, [0.0; 3]))
+                    .map(|b| Band::new(system, b.centre_nm, [0.0; 3]))
                     .collect(),
                 sampled: bands,
                 ghosts,
@@ -403,7 +403,8 @@ pub fn plan(
 /// The energy share under which ghosts are dim: the dimmest ghosts of `shares` (each ghost's
 /// energy over the direct image's) are dropped, dimmest first, while together they carry at
 /// most `budget` of the sum of all; the result is the share of the first ghost kept (ghosts
-/// with less are dropped, ties kept together). 0 when nothing can be dropped.
+/// with less are dropped, ties kept together); +∞ when all of them fit the budget (or there
+/// are none).
 pub fn dim_threshold(shares: impl Iterator<Item = f64>, budget: f64) -> f64 {
     let mut s: Vec<f64> = shares
         .filter(|e| e.is_finite())
@@ -496,7 +497,7 @@ mod tests {
         // Ties go together or stay together.
         assert_eq!(t(&[1.0, 1.0, 1.0, 7.0], 0.2), 1.0);
         assert_eq!(t(&[1.0, 1.0, 1.0, 7.0], 0.3), 7.0);
-        // Dark ghosts always go; NaN is ignored; nothing to drop gives 0 to infinity.
+        // Dark ghosts always go; NaN is ignored; when everything fits, everything goes.
         assert_eq!(t(&[0.0, 0.0, 5.0, f64::NAN], 0.0), 5.0);
         assert_eq!(t(&[], 0.5), f64::INFINITY);
         assert_eq!(t(&[2.0], 1.0), f64::INFINITY);
