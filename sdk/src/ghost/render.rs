@@ -18,7 +18,7 @@
 
 use crate::aperture::Aperture;
 use crate::image::{CoarseGrid, HdrImage};
-use crate::raster::rasterize;
+use crate::raster::{Coverage, rasterize_with};
 use crate::system::LensSystem;
 use crate::trace::{InterfaceTableSet, Sequence};
 
@@ -300,18 +300,23 @@ pub fn render_ghost(
         }
         stats.triangles += scratch.triangles.len() + scratch.inner_triangles.len();
         let rgb = band.rgb;
-        rasterize(
+        let coverage = Coverage::Sampled {
+            min_area: SAMPLED_MIN_AREA,
+        };
+        rasterize_with(
             img,
             &scratch.inner_positions,
             &scratch.inner_attrs,
             &scratch.inner_triangles,
+            coverage,
             |a: &[f32; 1]| [rgb[0] * a[0], rgb[1] * a[0], rgb[2] * a[0]],
         );
-        rasterize(
+        rasterize_with(
             img,
             &scratch.positions,
             &scratch.attrs,
             &scratch.triangles,
+            coverage,
             |a: &[f32; 5]| {
                 let clip = smoothstep(1.0 + 0.5 * feather, 1.0 - 0.5 * feather, a[4]);
                 let t = a[0] * a[1] * clip * aperture.transmission_soft(a[2], a[3], feather);
@@ -338,6 +343,12 @@ pub fn feather_width(bounds: &GhostBounds, n: usize, frame: &Frame) -> f32 {
     };
     f.max(1e-4) as f32
 }
+
+/// Triangles of at least this many pixels² (of the frame drawn into) are point-sampled
+/// ([`Coverage::Sampled`]); smaller ones — folds, caustics, diffraction-sized triangles —
+/// keep exact coverage. Measured on the Heliar at 1920 × 1080 (light 10°, 30°, default):
+/// render 400 → 155 ms, error against the reference 1.863% → 1.861% (2 and 4 px² alike).
+pub const SAMPLED_MIN_AREA: f32 = 4.0;
 
 /// Width of a ghost's edge on the image, in pixels of the frame it is drawn into.
 pub const EDGE_PIXELS: f64 = 1.0;

@@ -295,3 +295,80 @@ fn every_pixel_matches_clipping_the_triangle_to_it() {
         }
     }
 }
+
+/// A warped mesh of large triangles, point-sampled, covers every pixel centre inside it
+/// exactly once (shared edges counted once: no gap, no double count), in any tile layout.
+#[test]
+fn sampled_coverage_of_a_closed_mesh_counts_every_pixel_centre_once() {
+    let (w, h) = (150, 130);
+    let n = 9;
+    let mut pts = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            let (x, y) = (5.0 + i as f32 * 17.3, 3.0 + j as f32 * 15.1);
+            // Irregular interior vertices, the outline left straight.
+            let inner = i > 0 && i < n - 1 && j > 0 && j < n - 1;
+            let d = if inner {
+                ((i * 7 + j * 3) % 5) as f32 * 1.37 - 2.7
+            } else {
+                0.0
+            };
+            pts.push([x + d, y - 0.6 * d]);
+        }
+    }
+    let mut tris = Vec::new();
+    for j in 0..n - 1 {
+        for i in 0..n - 1 {
+            let k = (j * n + i) as u32;
+            let n = n as u32;
+            tris.push([k, k + 1, k + n + 1]);
+            tris.push([k, k + n + 1, k + n]);
+        }
+    }
+    let mut img = HdrImage::new(w, h);
+    let attrs = vec![[0.0_f32; 0]; pts.len()];
+    rasterize_with(
+        &mut img,
+        &pts,
+        &attrs,
+        &tris,
+        Coverage::Sampled { min_area: 1.0 },
+        |_| [1.0; 3],
+    );
+    let (x1, y1) = (5.0 + 8.0 * 17.3, 3.0 + 8.0 * 15.1);
+    for y in 0..h {
+        for x in 0..w {
+            let (cx, cy) = (x as f32 + 0.5, y as f32 + 0.5);
+            let inside = cx >= 5.0 && cx < x1 && cy >= 3.0 && cy < y1;
+            let got = img.get(x, y).unwrap()[0];
+            assert_eq!(got, if inside { 1.0 } else { 0.0 }, "pixel ({x}, {y})");
+        }
+    }
+}
+
+/// Triangles under `min_area` keep exact coverage; larger ones are sampled at pixel centres
+/// with their attributes interpolated there.
+#[test]
+fn sampled_coverage_keeps_small_triangles_exact_and_samples_large_ones() {
+    let mut img = HdrImage::new(2, 2);
+    let pts = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
+    let attrs = vec![[0.0_f32; 0]; 3];
+    let sampled = Coverage::Sampled { min_area: 1.0 };
+    rasterize_with(&mut img, &pts, &attrs, &[[0, 1, 2]], sampled, |_| [1.0; 3]);
+    assert!(close(&red(&img), &[0.5, 0.0, 0.0, 0.0]), "{:?}", red(&img));
+    // A 4 × 4 half square: the centres strictly left of the diagonal (a right-hand edge
+    // is exclusive); the attribute x is read at each centre.
+    let mut img = HdrImage::new(4, 4);
+    let pts = [[0.0, 0.0], [4.0, 4.0], [0.0, 4.0]];
+    let attrs: Vec<[f32; 1]> = pts.iter().map(|p| [p[0]]).collect();
+    rasterize_with(&mut img, &pts, &attrs, &[[0, 1, 2]], sampled, |a| {
+        [a[0], 0.0, 0.0]
+    });
+    for y in 0..4 {
+        for x in 0..4 {
+            let want = if x < y { x as f32 + 0.5 } else { 0.0 };
+            let got = img.get(x, y).unwrap()[0];
+            assert!((got - want).abs() < 1e-5, "({x},{y}) {got} vs {want}");
+        }
+    }
+}
