@@ -12,6 +12,7 @@ pub mod label;
 pub mod lens_library;
 pub mod output;
 pub mod plugin_dirs;
+pub mod precomputed;
 pub mod reference_file;
 pub mod report;
 pub mod sources;

@@ -72,6 +72,10 @@ pub struct LightReport {
     /// With `--reflections 4`: what became of the four-reflection ghosts (absent otherwise).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub four_reflections: Option<FourReflectionSummary>,
+    /// With `--precomputed`: the ghosts the table does not hold, whose bounds were traced for
+    /// this light (absent when there are none).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub bounds_not_in_table: Vec<String>,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -136,6 +140,7 @@ impl LightReport {
                 .collect(),
             four_reflections: (lp.reflections == ReflectionOrder::Four)
                 .then(|| lp.four_reflection_summary()),
+            bounds_not_in_table: lp.not_in_table.iter().map(|p| p.to_string()).collect(),
         }
     }
 }
@@ -183,6 +188,13 @@ impl RenderReport {
                     f.dropped_energy_share,
                     f.traced,
                     f.traced_energy_share
+                );
+            }
+            if !l.bounds_not_in_table.is_empty() {
+                s += &format!(
+                    "  bounds traced for {} ghosts not in the precomputed table: {}\n",
+                    l.bounds_not_in_table.len(),
+                    l.bounds_not_in_table.join(" ")
                 );
             }
             for g in l.ghosts.iter().take(5) {

@@ -481,3 +481,177 @@ fn an_aperture_mask_shapes_the_ghosts() {
         "{distance_map} vs {octagon}"
     );
 }
+
+/// OpenLensFlare's bounds file for the Heliar-Tronnier, as bundled for the tests.
+fn olf_bounds_file() -> String {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../tests/data/heliar-tronnier-bounds-full.xml")
+        .to_str()
+        .unwrap()
+        .to_string()
+}
+
+/// Renders the Heliar's ghosts (no starburst) at `light` into `dir/name.exr` with `extra`
+/// arguments; returns the report and the image.
+fn render_heliar(
+    dir: &std::path::Path,
+    name: &str,
+    light: &str,
+    extra: &[&str],
+) -> (Value, flarebench_sdk::image::HdrImage) {
+    let out = dir.join(format!("{name}.exr"));
+    let mut a = vec![
+        "render",
+        "heliar-tronnier",
+        "--light",
+        light,
+        "--size",
+        "320x180",
+        "--starburst",
+        "off",
+        "--json",
+        "-o",
+        out.to_str().unwrap(),
+    ];
+    a.extend_from_slice(extra);
+    let v = json(&a);
+    (v, flarebench::output::read_exr(&out).unwrap())
+}
+
+#[test]
+fn openlensflare_bounds_render_the_heliar_as_our_own_bounds_do() {
+    let dir = temp_dir("render-olf");
+    let olf = olf_bounds_file();
+    let table = dir.join("heliar-bounds.json");
+    let out = flarebench(&[
+        "precompute",
+        "heliar-tronnier",
+        "-o",
+        table.to_str().unwrap(),
+        "--max-angle-deg",
+        "12",
+        "--quiet",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for light in ["5,0", "10,30"] {
+        let (plain, img_plain) = render_heliar(&dir, "plain", light, &[]);
+        let (ours, img_ours) = render_heliar(
+            &dir,
+            "ours",
+            light,
+            &["--precomputed", table.to_str().unwrap()],
+        );
+        let (from_olf, img_olf) = render_heliar(&dir, "olf", light, &["--precomputed", &olf]);
+        let l = &from_olf["lights"][0];
+        // Every ghost of the lens is accounted for: the 13 of the file looked up, the 15 that
+        // straddle the stop traced and listed.
+        assert_eq!(l["ghosts_total"], 28);
+        assert_eq!(l["bounds_not_in_table"].as_array().unwrap().len(), 15);
+        assert!(plain["lights"][0]["bounds_not_in_table"].is_null());
+        assert!(ours["lights"][0]["bounds_not_in_table"].is_null());
+        let c_ours = img_ours.compare(&img_plain).unwrap();
+        let c_olf = img_olf.compare(&img_plain).unwrap();
+        let c_olf_ours = img_olf.compare(&img_ours).unwrap();
+        eprintln!(
+            "light {light}: ours/plain rmse {:.4} E {:+.4}; olf/plain rmse {:.4} L1 {:.4} E {:+.4}; olf/ours rmse {:.4} E {:+.4}",
+            c_ours.relative_rmse,
+            c_ours.energy_error,
+            c_olf.relative_rmse,
+            c_olf.relative_l1,
+            c_olf.energy_error,
+            c_olf_ours.relative_rmse,
+            c_olf_ours.energy_error
+        );
+        assert!(c_ours.relative_rmse < OLF_MAX_RMSE, "{light}: {c_ours:?}");
+        for c in [c_olf, c_olf_ours] {
+            assert!(c.relative_rmse < OLF_MAX_RMSE, "{light}: {c:?}");
+            // Cut rectangles only lose light.
+            assert!(
+                (-OLF_MAX_ENERGY_LOSS..OLF_MAX_ENERGY_GAIN).contains(&c.energy_error),
+                "{light}: {c:?}"
+            );
+        }
+    }
+}
+
+/// The image with OpenLensFlare's bounds against ours (none, or our JSON table), at 320×180,
+/// default quality, lights 5,0 and 10,30. Measured on 2026-11-25: relative RMSE 4.4% and
+/// 5.6% against the render without a table (6.5% against our table at 10,30; our own table
+/// against no table: 0.4% and 3.6%), energy −1.8% and −1.2%. The difference is the file's
+/// rectangles cutting ghosts (372 of its 574 entries with light: OpenLensFlare clips at a
+/// sensor radius of 24 mm and traces flat surfaces unrefracted), not its grid sizes (our grid
+/// rule instead changes the figures by < 0.1%). With OpenLensFlare's x and y not swapped the
+/// RMSE is 28% and 74%, so the bounds below catch a wrong conversion.
+const OLF_MAX_RMSE: f64 = 0.08;
+/// Energy: cut rectangles lose light (−1.8% at worst above), they cannot add any beyond the
+/// run-to-run noise of the two renders (our table against none: +0.35%).
+const OLF_MAX_ENERGY_LOSS: f64 = 0.03;
+const OLF_MAX_ENERGY_GAIN: f64 = 0.005;
+
+#[test]
+fn openlensflare_bounds_for_another_lens_or_corrupted_are_refused_with_their_place() {
+    let dir = temp_dir("render-olf-bad");
+    let o = dir.join("x.exr");
+    let render = |lens: &str, file: &str| {
+        flarebench(&[
+            "render",
+            lens,
+            "--light",
+            "5,0",
+            "--size",
+            "64x36",
+            "--starburst",
+            "off",
+            "-o",
+            o.to_str().unwrap(),
+            "--precomputed",
+            file,
+        ])
+    };
+    let olf = olf_bounds_file();
+    // The Heliar's file with the Nikon zoom: its ghosts are not the Nikon's.
+    let out = render("nikon-zoom-short", &olf);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("heliar-tronnier-bounds-full.xml"), "{err}");
+    assert!(
+        err.contains("the file's 13 ghosts are not those of lens `nikon-zoom-short`"),
+        "{err}"
+    );
+    // A corrupted value: reported at its file, line, column and field. Line 14 of the file
+    // is the first ghost's pupil `<w>`, its value at column 24.
+    let text = std::fs::read_to_string(&olf).unwrap();
+    let line = text.lines().nth(13).unwrap();
+    assert_eq!(line.trim(), "<w>0.181061</w>");
+    let bad = dir.join("bad-bounds.xml");
+    std::fs::write(&bad, text.replacen("<w>0.181061</w>", "<w>0.18q061</w>", 1)).unwrap();
+    let out = render("heliar-tronnier", bad.to_str().unwrap());
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    let want = format!(
+        "{}:14:24: field `w`: expected a number, got `0.18q061`",
+        bad.display()
+    );
+    assert!(err.contains(&want), "{err}");
+    // A broken JSON table: file, line, column and the key.
+    let bad = dir.join("bad-bounds.json");
+    std::fs::write(
+        &bad,
+        "{\"format\":\"flarebench-ghost-bounds\",\"version\":1,\n\"angles_deg\":[0.0,\"x\"]}",
+    )
+    .unwrap();
+    let out = render("heliar-tronnier", bad.to_str().unwrap());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(err.contains(&format!("{}:2:", bad.display())), "{err}");
+    assert!(err.contains("field `angles_deg`"), "{err}");
+    // Neither kind.
+    std::fs::write(&bad, "angle,ghost\n").unwrap();
+    let err = String::from_utf8_lossy(&render("heliar-tronnier", bad.to_str().unwrap()).stderr)
+        .to_string();
+    assert!(err.contains("neither a flarebench bounds table"), "{err}");
+}

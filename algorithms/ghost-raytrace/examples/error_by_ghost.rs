@@ -29,6 +29,7 @@ fn alone(lp: &LightPlan, g: usize) -> Vec<LightPlan> {
         reflections: lp.reflections,
         ghosts: vec![lp.ghosts[g].clone()],
         dropped: Vec::new(),
+        not_in_table: Vec::new(),
     }]
 }
 

@@ -10,8 +10,12 @@ pub enum GhostRenderError {
     Sampling(#[from] SpectralSamplingError),
     #[error("paraxial analysis: {0}")]
     Paraxial(#[from] ParaxialError),
-    #[error("the light at {theta_deg}° is outside the precomputed table (0–{max_deg}°)")]
-    OutsideTable { theta_deg: f64, max_deg: f64 },
+    #[error("the light at {theta_deg}° is outside the precomputed table ({min_deg}–{max_deg}°)")]
+    OutsideTable {
+        theta_deg: f64,
+        min_deg: f64,
+        max_deg: f64,
+    },
     #[error("the output buffer holds {len} pixels, not the frame's {width}×{height}")]
     OutputSize {
         width: usize,

@@ -50,6 +50,10 @@ pub struct LightPlan {
     pub dropped: Vec<DroppedGhost>,
     /// The reflection order planned for.
     pub reflections: ReflectionOrder,
+    /// With a precomputed table: the ghosts it does not hold (an OpenLensFlare file's ghosts
+    /// that straddle the stop, four-reflection ghosts of a table made without them), whose
+    /// bounds were traced for this light as without a table. Empty without a table.
+    pub not_in_table: Vec<GhostPath>,
 }
 
 /// A ghost to render.
@@ -166,8 +170,10 @@ pub struct PlanOptions<'a> {
     pub cull: bool,
     /// Multiplies each ghost's grid.
     pub grid_scale: f64,
-    /// Precomputed bounds (`flarebench precompute`); without them, bounds are traced for each
-    /// light's angle.
+    /// Precomputed bounds (`flarebench precompute`, or an OpenLensFlare file converted by
+    /// `BoundsTable::from_olf`); without them, bounds are traced for each light's angle. A
+    /// ghost the table does not hold has its bounds traced ([`LightPlan::not_in_table`]); a
+    /// light outside the table's angles is an error.
     pub precomputed: Option<&'a BoundsTable>,
     /// Trace every band of every ghost, however small its dispersion (the reference).
     pub all_bands: bool,
@@ -217,6 +223,9 @@ pub fn plan(
     let tables = InterfaceTableSet::for_system(system, BOUNDS_LAMBDA_NM);
     let four = reflections == ReflectionOrder::Four;
     let reflectances = four.then(|| ReflectanceBounds::new(system, &tables));
+    // A table lacking some ghost: its bounds are traced, which needs the direct flux.
+    let table_lacks =
+        precomputed.is_some_and(|t| paths.iter().any(|p| t.ghost_index(*p).is_none()));
     lights
         .iter()
         .map(|light| {
@@ -225,7 +234,7 @@ pub fn plan(
             let theta = light.theta_deg.to_radians();
             let phi = light.phi_deg.to_radians();
             // The direct image's flux: for traced energies, and for the four-reflection bound.
-            let direct = (precomputed.is_none() || four)
+            let direct = (precomputed.is_none() || four || table_lacks)
                 .then(|| bounds::direct_flux(system, &tables, theta, &mut GridTrace::default()));
             // Four-reflection ghosts whose energy bound is under the threshold are left out
             // here, before anything of theirs is traced or looked up.
@@ -256,26 +265,36 @@ pub fn plan(
                 }
                 _ => paths.clone(),
             };
+            let mut not_in_table = Vec::new();
             let found: Vec<(GhostPath, Option<GhostBounds>)> = match precomputed {
                 Some(table) => {
+                    let min = table.angles_deg.first().copied().unwrap_or(0.0);
                     let max = table.angles_deg.last().copied().unwrap_or(0.0);
-                    if light.theta_deg > max {
+                    if !(light.theta_deg >= min && light.theta_deg <= max) {
                         return Err(GhostRenderError::OutsideTable {
                             theta_deg: light.theta_deg,
+                            min_deg: min,
                             max_deg: max,
                         });
                     }
-                    // A four-reflection ghost missing from the table (made without them, or
-                    // with a higher bound threshold) is traced, as without a table.
+                    // A ghost missing from the table (a four-reflection ghost of a table made
+                    // without them or with a higher bound threshold; a ghost straddling the
+                    // stop in an OpenLensFlare file) is traced, as without a table.
+                    not_in_table = candidates
+                        .iter()
+                        .copied()
+                        .filter(|&p| table.ghost_index(p).is_none())
+                        .collect();
                     candidates
                         .par_iter()
                         .map_init(GridTrace::default, |scratch, &p| {
                             let b = match (table.ghost_index(p), direct) {
                                 (Some(g), _) => table.lookup(g, light.theta_deg),
-                                (None, Some(direct)) if p.is_four() => {
+                                (None, Some(direct)) => {
                                     bounds::precise(system, p, &tables, theta, direct, scratch)
                                 }
-                                (None, _) => None,
+                                // `direct` is traced whenever the table lacks a ghost.
+                                (None, None) => None,
                             };
                             (p, b)
                         })
@@ -395,6 +414,7 @@ pub fn plan(
                 ghosts,
                 dropped,
                 reflections,
+                not_in_table,
             })
         })
         .collect()

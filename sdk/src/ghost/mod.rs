@@ -9,10 +9,13 @@
 //! - [`render`]: one ghost into an HDR image — triangles with energy-conserving intensities,
 //!   the aperture's shape at the stop, feathered clipping, the diffraction-limit caustic bound.
 //! - [`table`]: bounds precomputed over a range of angles, stored and interpolated.
+//! - [`olf_table`]: OpenLensFlare's precomputed bounds (`<ghostList>` XML) as such a table,
+//!   checked against the lens, energies traced.
 
 pub mod bounds;
 pub mod enumerate;
 pub mod grid;
+pub mod olf_table;
 pub mod render;
 pub mod table;
 

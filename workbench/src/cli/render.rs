@@ -19,10 +19,10 @@ use crate::compose::{StarburstSetup, add_onto, add_starbursts};
 use crate::input_image::read_input_image;
 use crate::lens_library;
 use crate::output::{ExrPrecision, ToneMap, ToneOperator, save_image_as};
+use crate::precomputed::load_precomputed;
 use crate::reference_file::{ReferenceSource, reference_for};
 use crate::report::{ErrorReport, LightReport, RenderReport, Timings};
 use flarebench_sdk::ghost::ReflectionOrder;
-use flarebench_sdk::ghost::table::BoundsTable;
 
 #[derive(Debug, Args)]
 pub struct RenderArgs {
@@ -71,8 +71,10 @@ pub struct RenderArgs {
     /// Write EXR as 16-bit half floats instead of 32-bit floats.
     #[arg(long)]
     pub exr_half: bool,
-    /// Ghost bounds from `flarebench precompute` (else traced for each light).
-    #[arg(long)]
+    /// Ghost bounds precomputed over a range of angles (else traced for each light): our
+    /// JSON table from `flarebench precompute`, or OpenLensFlare's ghost-bounds XML
+    /// (`<ghostList>`), told apart by content. Ghosts the file lacks are traced.
+    #[arg(long, value_name = "FILE")]
     pub precomputed: Option<PathBuf>,
     /// Also render the dense reference and report the error against it.
     #[arg(long)]
@@ -313,17 +315,7 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
     let aperture = args.iris.aperture()?;
 
     let table = match &args.precomputed {
-        Some(p) => {
-            let text = std::fs::read_to_string(p)
-                .with_context(|| format!("could not read {}", p.display()))?;
-            let table: BoundsTable = serde_json::from_str(&text)
-                .with_context(|| format!("{} is not a ghost bounds file", p.display()))?;
-            table
-                .check_for(sys)
-                .map_err(anyhow::Error::msg)
-                .with_context(|| p.display().to_string())?;
-            Some(table)
-        }
+        Some(p) => Some(load_precomputed(p, sys, quiet || args.json)?),
         None => None,
     };
     timings.load_ms = ms(t_load);
