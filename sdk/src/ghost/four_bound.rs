@@ -13,8 +13,9 @@
 //! records its arriving weight × `R_d(cos θ_i)` from the same interface tables the ghost
 //! traces use (coatings included, 1 beyond the critical angle: a total internal reflection at
 //! `d` reflects everything; one before `d` stops the ray, as it does on the full path). That
-//! is `a·b·c` prefixes — about N³/3 for N reflecting surfaces, against N⁴/8 paths — each one
-//! grid.
+//! is one grid per prefix `a-b-c` — about N³/3 for N reflecting surfaces, against N⁴/8
+//! paths — and the legs to `a` and back to `b` are traced once per pair `a-b` and shared by
+//! its prefixes. A packet whose rays are all lost stops being traced.
 //!
 //! **Sampling.** The prefix is traced on [`BOUND_GRID`]² rays over
 //! [`bounds::entrance_search_rect`] at the light's angle: the very rays (bit for bit, same f32
@@ -43,7 +44,7 @@ use crate::trace::{Interaction, InterfaceTable, InterfaceTableSet, Probe, Sequen
 
 use super::bounds::{self, SEARCH_GRID};
 use super::enumerate::{GhostPath, reflecting_surfaces};
-use super::grid::{ProbedGrid, trace_grid_probed};
+use super::grid::ProbedGrid;
 
 /// Vertices per side of the grid each prefix is traced on: the precise search's grid
 /// ([`bounds::precise`] starts from the same rays).
@@ -71,25 +72,24 @@ impl FourReflectionBounds {
         direct: f64,
     ) -> Self {
         let r = reflecting_surfaces(system);
-        let mut prefixes = Vec::new();
+        let mut pairs = Vec::new();
         for (ia, &a) in r.iter().enumerate() {
-            for (ib, &b) in r[..ia].iter().enumerate() {
-                for &c in &r[ib + 1..] {
-                    prefixes.push((a, b, c));
-                }
+            for &b in &r[..ia] {
+                pairs.push((a, b));
             }
         }
-        let bounds = prefixes
+        let bounds = pairs
             .par_iter()
-            .map_init(ProbedGrid::default, |scratch, &(a, b, c)| {
-                prefix_bounds(system, tables, &r, [a, b, c], theta, direct, scratch)
+            .map_init(ProbedGrid::default, |scratch, &(a, b)| {
+                pair_bounds(system, tables, &r, [a, b], theta, direct, scratch)
             })
             .flatten_iter()
             .collect();
-        FourReflectionBounds {
-            bounds,
-            prefixes: prefixes.len(),
-        }
+        let prefixes = pairs
+            .iter()
+            .map(|&(_, b)| r.iter().filter(|&&c| c > b).count())
+            .sum();
+        FourReflectionBounds { bounds, prefixes }
     }
 
     /// The bound on `path`'s energy share; `None` for a path that is not a four-reflection
@@ -114,68 +114,76 @@ impl FourReflectionBounds {
     }
 }
 
-/// The bounds of every path `a-b-c-d` of one prefix (`abc`), `d` over the reflecting surfaces
-/// `r` before `c`.
-fn prefix_bounds(
+/// The bounds of every path `a-b-c-d` with the first two reflections `ab`: the grid is
+/// traced to `a` and back to `b` once, then on from there for each prefix `a-b-c`, `c > b`
+/// over the reflecting surfaces `r`, and read at every reflecting `d < c`.
+fn pair_bounds(
     system: &LensSystem,
     tables: &InterfaceTableSet,
     r: &[usize],
-    [a, b, c]: [usize; 3],
+    [a, b]: [usize; 2],
     theta: f64,
     direct: f64,
     scratch: &mut ProbedGrid,
 ) -> Vec<(GhostPath, f64)> {
-    let ds: Vec<usize> = r.iter().copied().take_while(|&d| d < c).collect();
-    let lowest = ds[0];
-    // Forward to `a`, back to `b`, forward to `c`, then back down to the lowest reflecting
-    // surface, refracting there: the steps of every `a-b-c-d` up to its `d`.
-    let mut path: Vec<(usize, Interaction)> = (0..a).map(|i| (i, Interaction::Refract)).collect();
-    path.push((a, Interaction::Reflect));
-    path.extend((b + 1..a).rev().map(|i| (i, Interaction::Refract)));
-    path.push((b, Interaction::Reflect));
-    path.extend((b + 1..c).map(|i| (i, Interaction::Refract)));
-    path.push((c, Interaction::Reflect));
-    let leg = path.len();
-    path.extend((lowest..c).rev().map(|i| (i, Interaction::Refract)));
-    let Ok(seq) = Sequence::custom(system, tables.lambda_nm, true, &path) else {
+    let sequence = |start_forward: bool, path: &[(usize, Interaction)]| {
+        Sequence::custom(system, tables.lambda_nm, start_forward, path)
+            .ok()
+            .map(|s| s.with_tables_from(tables).cast::<f32>())
+    };
+    // Forward to `a`, back to `b`: shared by every `c`.
+    let mut ab: Vec<(usize, Interaction)> = (0..a).map(|i| (i, Interaction::Refract)).collect();
+    ab.push((a, Interaction::Reflect));
+    ab.extend((b + 1..a).rev().map(|i| (i, Interaction::Refract)));
+    ab.push((b, Interaction::Reflect));
+    let Some(ab) = sequence(true, &ab) else {
         return Vec::new();
     };
-    let seq = seq.with_tables_from(tables).cast::<f32>();
-    let probes: Vec<Probe<f32>> = (leg..path.len())
-        .filter(|&i| ds.contains(&path[i].0))
-        .map(|i| Probe {
-            step: i,
-            // The reflectance toward the object at `d`; a surface without a table reflects
-            // with weight 1 on a traced path (its step leaves the weight alone).
-            table: tables.get(path[i].0, false, Interaction::Reflect).map_or(
-                InterfaceTable {
-                    values: [1.0; TABLE_LEN],
-                },
-                |t| InterfaceTable {
-                    values: t.values.map(|v| v as f32),
-                },
-            ),
-        })
-        .collect();
     let rect = bounds::entrance_search_rect(system, theta);
-    trace_grid_probed(&seq, theta, rect, BOUND_GRID, &probes, scratch);
+    scratch.start(&ab, theta, rect, BOUND_GRID);
     let scale = if direct > 0.0 {
         scratch.cell_area() * theta.cos() / direct
     } else {
         0.0
     };
-    let mut cells = Vec::new();
-    probes
-        .iter()
-        .enumerate()
-        .map(|(k, p)| {
+    let mut out = Vec::new();
+    let mut sums = SumScratch::default();
+    for &c in r.iter().filter(|&&c| c > b) {
+        let ds: Vec<usize> = r.iter().copied().take_while(|&d| d < c).collect();
+        // Forward from `b` to `c`, then back down to the lowest reflecting surface, refracting
+        // there: the steps of every `a-b-c-d` from `b` up to its `d`.
+        let mut path: Vec<(usize, Interaction)> =
+            (b + 1..c).map(|i| (i, Interaction::Refract)).collect();
+        path.push((c, Interaction::Reflect));
+        let leg = path.len();
+        path.extend((ds[0]..c).rev().map(|i| (i, Interaction::Refract)));
+        let Some(seq) = sequence(true, &path) else {
+            continue;
+        };
+        let probes: Vec<Probe<f32>> = (leg..path.len())
+            .filter(|&i| ds.contains(&path[i].0))
+            .map(|i| Probe {
+                step: i,
+                // The reflectance toward the object at `d`; a surface without a table
+                // reflects with weight 1 on a traced path (its step leaves the weight alone).
+                table: tables.get(path[i].0, false, Interaction::Reflect).map_or(
+                    InterfaceTable {
+                        values: [1.0; TABLE_LEN],
+                    },
+                    |t| InterfaceTable {
+                        values: t.values.map(|v| v as f32),
+                    },
+                ),
+            })
+            .collect();
+        scratch.continue_probed(&seq, &probes);
+        for (k, p) in probes.iter().enumerate() {
             let d = path[p.step].0;
-            (
-                GhostPath::four(a, b, c, d),
-                grid_sum(scratch, k, &mut cells) * scale,
-            )
-        })
-        .collect()
+            let bound = grid_sum(scratch, k, &mut sums) * scale;
+            out.push((GhostPath::four(a, b, c, d), bound));
+        }
+    }
+    out
 }
 
 /// Rings of neighbouring cells a cell's largest corner value is spread over in the upper
@@ -184,41 +192,52 @@ fn prefix_bounds(
 pub const BOUND_DILATION_CELLS: usize = 1;
 
 /// The larger of probe `k`'s vertex sum and its dilated upper cell sum over the grid (module
-/// docs); `cells` is scratch.
-fn grid_sum(g: &ProbedGrid, k: usize, cells: &mut Vec<f64>) -> f64 {
+/// docs). `buf` is scratch.
+fn grid_sum(g: &ProbedGrid, k: usize, buf: &mut SumScratch) -> f64 {
     let n = g.n;
     let m = n - 1;
-    let v = |i: usize, j: usize| f64::from(g.value(k, j * n + i));
-    let mut vertices = 0.0;
-    for j in 0..n {
-        for i in 0..n {
-            vertices += v(i, j);
-        }
+    let SumScratch {
+        vertices,
+        cells,
+        rows,
+    } = buf;
+    if g.values(k).all(|v| v <= 0.0) {
+        // Nothing open (the values are ≥ 0): every sum is 0. Most probes end here.
+        return 0.0;
     }
-    // Largest corner per cell, then the largest over each cell's neighbourhood.
+    vertices.clear();
+    vertices.extend(g.values(k).map(f64::from));
+    let vertex_sum: f64 = vertices.iter().sum();
+    // Largest corner per cell; then the largest over the cell's neighbourhood, a separable
+    // max filter (along rows, then along columns).
     cells.clear();
     for j in 0..m {
-        for i in 0..m {
-            cells.push(
-                v(i, j)
-                    .max(v(i + 1, j))
-                    .max(v(i, j + 1))
-                    .max(v(i + 1, j + 1)),
-            );
-        }
+        let (lo, hi) = (
+            &vertices[j * n..(j + 1) * n],
+            &vertices[(j + 1) * n..(j + 2) * n],
+        );
+        cells.extend((0..m).map(|i| lo[i].max(lo[i + 1]).max(hi[i]).max(hi[i + 1])));
     }
     let r = BOUND_DILATION_CELLS;
+    let window = |i: usize| i.saturating_sub(r)..(i + r + 1).min(m);
+    rows.clear();
+    for j in 0..m {
+        let row = &cells[j * m..(j + 1) * m];
+        rows.extend((0..m).map(|i| row[window(i)].iter().copied().fold(0.0, f64::max)));
+    }
     let mut dilated = 0.0;
     for j in 0..m {
         for i in 0..m {
-            let mut top = 0.0f64;
-            for jj in j.saturating_sub(r)..(j + r + 1).min(m) {
-                for ii in i.saturating_sub(r)..(i + r + 1).min(m) {
-                    top = top.max(cells[jj * m + ii]);
-                }
-            }
-            dilated += top;
+            dilated += window(j).map(|jj| rows[jj * m + i]).fold(0.0, f64::max);
         }
     }
-    vertices.max(dilated)
+    vertex_sum.max(dilated)
+}
+
+/// Buffers [`grid_sum`] reuses.
+#[derive(Debug, Default)]
+struct SumScratch {
+    vertices: Vec<f64>,
+    cells: Vec<f64>,
+    rows: Vec<f64>,
 }

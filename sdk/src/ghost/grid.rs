@@ -138,6 +138,8 @@ pub struct ProbedGrid {
     /// Number of probes.
     pub probes: usize,
     batch: RayBatch<f32>,
+    /// The rays as [`ProbedGrid::start`] left them.
+    base: RayBatch<f32>,
     rows: Vec<[f32; LANES]>,
 }
 
@@ -148,10 +150,43 @@ impl ProbedGrid {
         self.rows[(v / LANES) * self.probes + k][v % LANES]
     }
 
+    /// Probe `k`'s values at every vertex, in vertex order.
+    pub fn values(&self, k: usize) -> impl Iterator<Item = f32> + '_ {
+        self.rows
+            .iter()
+            .skip(k)
+            .step_by(self.probes.max(1))
+            .flat_map(|row| row.iter().copied())
+            .take(self.n * self.n)
+    }
+
     /// Area of one grid cell on the entrance plane (mm²).
     pub fn cell_area(&self) -> f64 {
         let d = (self.n.max(2) - 1) as f64;
         (self.rect.width() / d) * (self.rect.height() / d)
+    }
+
+    /// Traces the `n × n` grid of [`trace_grid`] (the same rays) through `prefix` on the
+    /// calling thread, without probes, and keeps the rays as they are then: the start of every
+    /// [`Self::continue_probed`] until the next `start`. Paths that share their first steps
+    /// trace them once.
+    pub fn start(&mut self, prefix: &Sequence<f32>, theta: f64, rect: Rect, n: usize) {
+        let n = n.max(2);
+        push_grid_rays(&mut self.base, theta, rect, n);
+        prefix.trace_batch_serial(&mut self.base);
+        self.n = n;
+        self.rect = rect;
+        self.probes = 0;
+    }
+
+    /// A copy of the rays [`Self::start`] kept, traced on through `seq` (the steps after the
+    /// prefix; a sequence built to start travelling the way the prefix left the rays) with
+    /// `probes` ([`Sequence::trace_batch_probed`]); bit for bit what tracing the prefix's
+    /// steps followed by `seq`'s in one sequence records.
+    pub fn continue_probed(&mut self, seq: &Sequence<f32>, probes: &[Probe<f32>]) {
+        self.batch.clone_from(&self.base);
+        seq.trace_batch_probed(&mut self.batch, probes, &mut self.rows);
+        self.probes = probes.len();
     }
 }
 

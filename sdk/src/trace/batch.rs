@@ -174,7 +174,8 @@ impl<T: Real> Sequence<T> {
     /// `probes` are in increasing step order; `out` is resized to `packets × probes.len()`
     /// rows of [`LANES`] values: row `packet * probes.len() + k` holds probe `k` for the
     /// packet's rays (padding lanes hold meaningless values). Nothing is allocated while
-    /// tracing.
+    /// tracing. Only the probes are the result: a packet stops being traced after the last
+    /// probe, or once all its rays are lost, so the batch's rays are left part-way.
     pub fn trace_batch_probed(
         &self,
         batch: &mut RayBatch<T>,
@@ -220,8 +221,15 @@ fn trace_packet_probed_dispatch<T: Real>(
     p: &mut Packet<T>,
     out: &mut [[T; LANES]],
 ) {
+    let slack2 = T::of(PROBE_CLIP_SLACK * PROBE_CLIP_SLACK);
     let mut next = 0;
     for (i, s) in steps.iter().enumerate() {
+        // Once every ray of the packet has stopped or been clipped, no later probe can read
+        // anything but 0 (the rows are zeroed): the rest of the steps are skipped.
+        let lost = |l: usize| p.fate[l] & TERMINATED != 0 || p.max_rel2[l] > slack2;
+        if next == probes.len() || (0..LANES).all(lost) {
+            break;
+        }
         let table = s.table.map(|t| &tables[t as usize]);
         match probes.get(next).filter(|pr| pr.step == i) {
             Some(pr) => {
