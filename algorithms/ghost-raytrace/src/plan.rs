@@ -6,9 +6,10 @@
 //! energy ([`dim_threshold`]; a ghost's energy share is its flux over the direct image's,
 //! from its bounds). With
 //! [`ReflectionOrder::Four`] the four-reflection ghosts come too, but first each is checked
-//! against a cheap upper bound on its energy share (`bounds::energy_bound`, no tracing): those
-//! whose bound is under the threshold are left out before anything is traced, reported with
-//! the bound as their energy share ([`DropReason::Bound`]).
+//! against an upper bound on its energy share (`FourReflectionBounds`: one grid traced per
+//! three-reflection prefix, none per path): those whose bound is under the threshold are left
+//! out before their own bounds are traced, reported with the bound as their energy share
+//! ([`DropReason::Bound`]).
 //!
 //! Each ghost gets its own spectral sampling: `m` equal bins over 380–780 nm, each traced at
 //! its centre in the colour of its whole bin, with `m` as small as keeps neighbouring bins
@@ -17,11 +18,11 @@
 
 use flarebench_sdk::LensSystem;
 use flarebench_sdk::color::SpectralSampling;
-use flarebench_sdk::ghost::bounds::{self, GhostBounds, MAX_GRID, MIN_GRID, ReflectanceBounds};
+use flarebench_sdk::ghost::bounds::{self, GhostBounds, MAX_GRID, MIN_GRID};
 use flarebench_sdk::ghost::render::{Band, Frame};
 use flarebench_sdk::ghost::table::BoundsTable;
 use flarebench_sdk::ghost::{
-    GhostPath, GridTrace, Rect, ReflectionOrder, enumerate_ghosts_of_order,
+    FourReflectionBounds, GhostPath, GridTrace, Rect, ReflectionOrder, enumerate_ghosts_of_order,
 };
 use flarebench_sdk::trace::InterfaceTableSet;
 use std::collections::HashMap;
@@ -102,8 +103,9 @@ pub enum DropReason {
     Dim,
     /// Sensor bounds outside the frame.
     OffFrame,
-    /// A four-reflection ghost whose energy bound (found before tracing) is under the
-    /// threshold; its `energy_share` is that bound, not a traced energy.
+    /// A four-reflection ghost whose energy bound (`FourReflectionBounds`, found before its
+    /// own bounds are traced) is under the threshold; its `energy_share` is that bound, not a
+    /// traced energy.
     Bound,
 }
 
@@ -222,7 +224,6 @@ pub fn plan(
     let paths = enumerate_ghosts_of_order(system, reflections);
     let tables = InterfaceTableSet::for_system(system, BOUNDS_LAMBDA_NM);
     let four = reflections == ReflectionOrder::Four;
-    let reflectances = four.then(|| ReflectanceBounds::new(system, &tables));
     // A table lacking some ghost: its bounds are traced, which needs the direct flux.
     let table_lacks =
         precomputed.is_some_and(|t| paths.iter().any(|p| t.ghost_index(*p).is_none()));
@@ -239,9 +240,9 @@ pub fn plan(
             // Four-reflection ghosts whose energy bound is under the threshold are left out
             // here, before anything of theirs is traced or looked up.
             let mut bounded_out = Vec::new();
-            let candidates: Vec<GhostPath> = match (&reflectances, direct) {
-                (Some(refl), Some(direct)) if cull => {
-                    let scale = bounds::energy_bound_scale(system, theta, direct);
+            let candidates: Vec<GhostPath> = match direct {
+                Some(direct) if four && cull => {
+                    let refl = FourReflectionBounds::compute(system, &tables, theta, direct);
                     let threshold = quality.energy_threshold();
                     paths
                         .iter()
@@ -250,7 +251,8 @@ pub fn plan(
                             if !p.is_four() {
                                 return true;
                             }
-                            let bound = bounds::energy_bound(refl, p, scale);
+                            // Every four-reflection path of the lens has a bound.
+                            let bound = refl.get(p).unwrap_or(f64::INFINITY);
                             let keep = bound >= threshold;
                             if !keep {
                                 bounded_out.push(DroppedGhost {

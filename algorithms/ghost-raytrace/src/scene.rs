@@ -186,7 +186,7 @@ impl Quality {
     }
 
     /// Four-reflection paths whose energy bound (of the direct image's energy) is below this
-    /// are left out before anything of theirs is traced (`ghost::bounds::energy_bound`). Two-
+    /// are left out before their own bounds are traced (`ghost::FourReflectionBounds`). Two-
     /// reflection ghosts are culled by [`Quality::dim_budget`] instead, once traced.
     pub fn energy_threshold(self) -> f64 {
         match self {

@@ -4,12 +4,12 @@
 
 use flarebench_sdk::LensSystem;
 use flarebench_sdk::aperture::Aperture;
-use flarebench_sdk::ghost::bounds::{
-    self, BoundsMode, ReflectanceBounds, energy_bound, energy_bound_scale,
-};
+use flarebench_sdk::ghost::bounds::{self, BoundsMode};
 use flarebench_sdk::ghost::render::Frame;
 use flarebench_sdk::ghost::table::{BoundsTable, TableOptions};
-use flarebench_sdk::ghost::{GridTrace, ReflectionOrder, enumerate_four_reflection_ghosts};
+use flarebench_sdk::ghost::{
+    FourReflectionBounds, GridTrace, ReflectionOrder, enumerate_four_reflection_ghosts,
+};
 use flarebench_sdk::io::read_lens;
 use flarebench_sdk::trace::InterfaceTableSet;
 use ghost_raytrace::ghosts;
@@ -61,10 +61,10 @@ fn the_plan_culls_four_reflection_ghosts_by_their_bound_before_tracing() {
     }
     // The bound at this light, as the plan finds it.
     let tables = InterfaceTableSet::for_system(&sys, BOUNDS_LAMBDA_NM);
-    let refl = ReflectanceBounds::new(&sys, &tables);
     let theta = 10f64.to_radians();
     let direct = bounds::direct_flux(&sys, &tables, theta, &mut GridTrace::default());
-    let scale = energy_bound_scale(&sys, theta, direct);
+    let refl = FourReflectionBounds::compute(&sys, &tables, theta, direct);
+    let bound = |p: &flarebench_sdk::ghost::GhostPath| refl.get(p).unwrap();
     let threshold = q.energy_threshold();
     let s = four.four_reflection_summary();
     assert_eq!(s.paths, 658);
@@ -77,21 +77,20 @@ fn the_plan_culls_four_reflection_ghosts_by_their_bound_before_tracing() {
     {
         assert!(d.path.is_four());
         assert!(d.energy_share < threshold);
-        assert_eq!(d.energy_share, energy_bound(&refl, &d.path, scale));
+        assert_eq!(d.energy_share, bound(&d.path));
     }
     // Every four-reflection path that survived the bound was traced; its traced energy share
     // is within its bound.
     let mut survivors = 0;
     for g in four.ghosts.iter().filter(|g| g.path.is_four()) {
-        let bound = energy_bound(&refl, &g.path, scale);
-        assert!(bound >= threshold);
-        assert!(g.energy_share <= bound, "{}", g.path);
+        assert!(bound(&g.path) >= threshold);
+        assert!(g.energy_share <= bound(&g.path), "{}", g.path);
         survivors += 1;
     }
     for d in four.dropped.iter().filter(|d| d.path.is_four()) {
         if d.reason != DropReason::Bound {
-            assert!(energy_bound(&refl, &d.path, scale) >= threshold);
-            assert!(d.energy_share <= energy_bound(&refl, &d.path, scale));
+            assert!(bound(&d.path) >= threshold);
+            assert!(d.energy_share <= bound(&d.path));
             survivors += 1;
         }
     }
@@ -174,8 +173,10 @@ fn a_table_without_four_reflection_ghosts_gives_the_same_plan_as_no_table() {
     assert!((lit(&s4) / lit(&sn) - 1.0).abs() < 0.1, "{s4:?} vs {sn:?}");
 }
 
-/// The Nikon zoom has 36 785 four-reflection paths: at fast quality the bound leaves about a
-/// third (measured: 25 662 left out at 10°), and the image of the rest stays finite.
+/// The Nikon zoom has 36 785 four-reflection paths: at fast quality the traced bound leaves
+/// out nearly all of them (measured: 36 520 at 10°; the old untraced bound 25 662), the one
+/// four-reflection ghost the default quality draws (6-5-7-6) is still traced, and the image
+/// stays finite.
 #[test]
 fn a_four_reflection_render_of_the_nikon_zoom_is_finite() {
     let sys = lens("nikon-zoom-short");
@@ -185,8 +186,9 @@ fn a_four_reflection_render_of_the_nikon_zoom_is_finite() {
     let opts = options(Quality::Fast, ReflectionOrder::Four);
     let plans = plan::plan(&sys, &lights, &f, &opts).unwrap();
     let s = plans[0].four_reflection_summary();
+    eprintln!("{s:?}");
     assert_eq!(s.paths, 36_785);
-    assert!(s.bounded_out > 20_000, "{s:?}");
+    assert!(s.bounded_out > 35_000, "{s:?}");
     assert!(s.traced > 0, "{s:?}");
     let (img, stats) = ghosts::render(&sys, &Aperture::Circular, f, &plans).unwrap();
     assert!(!img.has_non_finite());

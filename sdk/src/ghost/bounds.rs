@@ -9,8 +9,8 @@
 //!   rays that pass every aperture is refined twice on finer grids, and the ghost's energy
 //!   share and grid size are measured on the last grid.
 //!
-//! And, before any of that, a cheap upper bound on a path's energy share
-//! ([`energy_bound`]) that culls four-reflection paths without tracing them.
+//! Four-reflection paths are culled before either, by the traced prefix bound of
+//! [`super::four_bound`].
 //!
 //! Bounds are computed in the meridional frame (light in the y–z plane); for a light at
 //! azimuth φ the rectangle and the sensor bounds rotate with it about the axis.
@@ -126,7 +126,7 @@ pub enum BoundsMode {
 
 /// Grid sizes the precise mode searches with (from scratch, and from a nearby angle's
 /// rectangle) and measures with.
-const SEARCH_GRID: usize = 33;
+pub(crate) const SEARCH_GRID: usize = 33;
 const WARM_GRID: usize = 25;
 const REFINE_GRID: usize = 33;
 /// Grid size range chosen for rendering.
@@ -158,88 +158,6 @@ pub fn direct_flux(
     let rect = entrance_search_rect(system, theta);
     trace_grid(&seq, theta, rect, 129, stop, scratch);
     passing_flux(scratch, theta)
-}
-
-/// Largest angle of incidence (degrees) at a reflection that [`ReflectanceBounds`] covers.
-pub const BOUND_MAX_INCIDENCE_DEG: f64 = 30.0;
-
-/// Margin on the entrance area in [`energy_bound_scale`]: a grid's passing vertices inside a
-/// rectangle of `W × H` stand for at most `(W + cell)(H + cell)` (a 33² grid: ≤ 6.3% more).
-pub const ENTRANCE_AREA_MARGIN: f64 = 1.1;
-
-/// Per surface, the largest reflectance for light arriving toward the sensor and toward the
-/// object at incidence angles from 0 to [`BOUND_MAX_INCIDENCE_DEG`], read from the interface
-/// tables the traced energies use (same wavelength, same coatings). 0 where nothing reflects.
-#[derive(Clone, Debug)]
-pub struct ReflectanceBounds {
-    /// `[forward, backward]` per surface.
-    r: Vec<[f64; 2]>,
-}
-
-impl ReflectanceBounds {
-    /// From the interface tables of `system` (e.g. at `BOUNDS_LAMBDA_NM`).
-    pub fn new(system: &LensSystem, tables: &InterfaceTableSet) -> Self {
-        Self::up_to(system, tables, BOUND_MAX_INCIDENCE_DEG)
-    }
-
-    /// [`Self::new`] over incidence angles from 0 to `max_incidence_deg`.
-    pub fn up_to(system: &LensSystem, tables: &InterfaceTableSet, max_incidence_deg: f64) -> Self {
-        let cos_min = max_incidence_deg.to_radians().cos();
-        // Table entry j is at cos = j / (len − 1); include the entry below cos_min, which the
-        // interpolation between it and the next one uses.
-        let last = (crate::trace::TABLE_LEN - 1) as f64;
-        let j0 = ((cos_min * last).floor() as usize).min(crate::trace::TABLE_LEN - 1);
-        let max_of = |s: usize, forward: bool| {
-            tables
-                .get(s, forward, Interaction::Reflect)
-                .map_or(0.0, |t| t.values[j0..].iter().copied().fold(0.0, f64::max))
-        };
-        ReflectanceBounds {
-            r: (0..system.surfaces.len())
-                .map(|s| [max_of(s, true), max_of(s, false)])
-                .collect(),
-        }
-    }
-
-    /// The product of the reflectance bounds along `path`: the first reflection arrives
-    /// travelling toward the sensor, the next toward the object, and so on.
-    pub fn product(&self, path: &GhostPath) -> f64 {
-        path.reflections()
-            .iter()
-            .enumerate()
-            .map(|(k, &s)| self.r.get(s).map_or(0.0, |r| r[k % 2]))
-            .product()
-    }
-}
-
-/// The geometric part of [`energy_bound`] at `theta`: the largest flux a path can carry for
-/// unit irradiance and unit throughput — every ray that enters the lens at all starts inside
-/// [`entrance_search_rect`], so at most its area (× [`ENTRANCE_AREA_MARGIN`]) × cos θ — over
-/// the direct image's flux `direct` ([`direct_flux`] at the same angle). 0 when `direct` is
-/// 0: energy shares are 0 then, as [`precise`] defines them.
-pub fn energy_bound_scale(system: &LensSystem, theta: f64, direct: f64) -> f64 {
-    let area = entrance_search_rect(system, theta).area() * ENTRANCE_AREA_MARGIN;
-    if direct > 0.0 {
-        area * theta.cos() / direct
-    } else {
-        // No direct image: every ghost's energy share is 0 by definition ([`precise`]).
-        0.0
-    }
-}
-
-/// An upper bound on the energy share (flux over the direct image's) of `path` at the angle
-/// `scale` was made for ([`energy_bound_scale`]), found without tracing it: the product of the
-/// reflectance bounds at its reflections ([`ReflectanceBounds::product`]), times 1 for every
-/// transmittance along the path (each ≤ 1), times the geometric bound `scale`. Four
-/// multiplications per path, so ~10⁵ four-reflection paths cost nothing.
-///
-/// It bounds the traced energy share ([`precise`]) as long as no ray of the path reflects at
-/// more than [`BOUND_MAX_INCIDENCE_DEG`] incidence (beyond it, uncoated reflectance rises and
-/// total internal reflection reaches 1); the entrance-area term is usually far from tight,
-/// which leaves room for that. `ghosts.rs` in the sdk's tests checks it against the traced
-/// energy of every four-reflection ghost of the Heliar at 10° and 30°.
-pub fn energy_bound(reflectances: &ReflectanceBounds, path: &GhostPath, scale: f64) -> f64 {
-    reflectances.product(path) * scale
 }
 
 /// Σ weight × cell area × cos θ over the passing vertices.

@@ -2,7 +2,7 @@
 //! one path at one wavelength. Nothing is dropped: every vertex keeps its landing point, its
 //! largest relative radius (for feathered clipping) and its Fresnel/coating weight.
 
-use crate::trace::{LANES, RayBatch, Real, Sequence};
+use crate::trace::{LANES, Probe, RayBatch, Real, Sequence};
 
 use super::bounds::Rect;
 
@@ -84,17 +84,7 @@ fn fill<T: Real>(
     out: &mut GridTrace,
 ) {
     let n = n.max(2);
-    let (s, c) = theta.sin_cos();
-    let dir = [T::of(0.0), T::of(s), T::of(c)];
-    batch.clear();
-    let d = (n - 1) as f64;
-    for j in 0..n {
-        let y = rect.y0 + rect.height() * j as f64 / d;
-        for i in 0..n {
-            let x = rect.x0 + rect.width() * i as f64 / d;
-            batch.push([T::of(x), T::of(y), T::of(0.0)], dir);
-        }
-    }
+    push_grid_rays(batch, theta, rect, n);
     seq.trace_batch(batch);
     let total = n * n;
     out.n = n;
@@ -119,4 +109,102 @@ fn fill<T: Real>(
             out.completed.push(p.completed(l));
         }
     }
+}
+
+/// Fills `batch` with the `n × n` grid of collimated rays over `rect` at `theta`, vertex
+/// `(i, j)` at `j * n + i`: the rays every grid of this module traces.
+fn push_grid_rays<T: Real>(batch: &mut RayBatch<T>, theta: f64, rect: Rect, n: usize) {
+    let (s, c) = theta.sin_cos();
+    let dir = [T::of(0.0), T::of(s), T::of(c)];
+    batch.clear();
+    let d = (n - 1) as f64;
+    for j in 0..n {
+        let y = rect.y0 + rect.height() * j as f64 / d;
+        for i in 0..n {
+            let x = rect.x0 + rect.width() * i as f64 / d;
+            batch.push([T::of(x), T::of(y), T::of(0.0)], dir);
+        }
+    }
+}
+
+/// A grid traced with probes ([`trace_grid_probed`]): per probe, per vertex, the weight a
+/// reflection at the probed step would pass on.
+#[derive(Clone, Debug, Default)]
+pub struct ProbedGrid {
+    /// Vertices per side.
+    pub n: usize,
+    /// The entrance-plane rectangle the grid spans.
+    pub rect: Rect,
+    /// Number of probes.
+    pub probes: usize,
+    batch: RayBatch<f32>,
+    /// The rays as [`ProbedGrid::start`] left them.
+    base: RayBatch<f32>,
+    rows: Vec<[f32; LANES]>,
+}
+
+impl ProbedGrid {
+    /// Probe `k`'s value at vertex `v` (`j * n + i`), as [`Sequence::trace_batch_probed`]
+    /// records it.
+    pub fn value(&self, k: usize, v: usize) -> f32 {
+        self.rows[(v / LANES) * self.probes + k][v % LANES]
+    }
+
+    /// Probe `k`'s values at every vertex, in vertex order.
+    pub fn values(&self, k: usize) -> impl Iterator<Item = f32> + '_ {
+        self.rows
+            .iter()
+            .skip(k)
+            .step_by(self.probes.max(1))
+            .flat_map(|row| row.iter().copied())
+            .take(self.n * self.n)
+    }
+
+    /// Area of one grid cell on the entrance plane (mm²).
+    pub fn cell_area(&self) -> f64 {
+        let d = (self.n.max(2) - 1) as f64;
+        (self.rect.width() / d) * (self.rect.height() / d)
+    }
+
+    /// Traces the `n × n` grid of [`trace_grid`] (the same rays) through `prefix` on the
+    /// calling thread, without probes, and keeps the rays as they are then: the start of every
+    /// [`Self::continue_probed`] until the next `start`. Paths that share their first steps
+    /// trace them once.
+    pub fn start(&mut self, prefix: &Sequence<f32>, theta: f64, rect: Rect, n: usize) {
+        let n = n.max(2);
+        push_grid_rays(&mut self.base, theta, rect, n);
+        prefix.trace_batch_serial(&mut self.base);
+        self.n = n;
+        self.rect = rect;
+        self.probes = 0;
+    }
+
+    /// A copy of the rays [`Self::start`] kept, traced on through `seq` (the steps after the
+    /// prefix; a sequence built to start travelling the way the prefix left the rays) with
+    /// `probes` ([`Sequence::trace_batch_probed`]); bit for bit what tracing the prefix's
+    /// steps followed by `seq`'s in one sequence records.
+    pub fn continue_probed(&mut self, seq: &Sequence<f32>, probes: &[Probe<f32>]) {
+        self.batch.clone_from(&self.base);
+        seq.trace_batch_probed(&mut self.batch, probes, &mut self.rows);
+        self.probes = probes.len();
+    }
+}
+
+/// Traces the same `n × n` grid as [`trace_grid`] (the same rays, bit for bit) through `seq`
+/// on the calling thread, recording the `probes` ([`Sequence::trace_batch_probed`]) into
+/// `out` (buffers are reused).
+pub fn trace_grid_probed(
+    seq: &Sequence<f32>,
+    theta: f64,
+    rect: Rect,
+    n: usize,
+    probes: &[Probe<f32>],
+    out: &mut ProbedGrid,
+) {
+    let n = n.max(2);
+    push_grid_rays(&mut out.batch, theta, rect, n);
+    seq.trace_batch_probed(&mut out.batch, probes, &mut out.rows);
+    out.n = n;
+    out.rect = rect;
+    out.probes = probes.len();
 }

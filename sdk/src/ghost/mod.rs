@@ -4,8 +4,9 @@
 //! - [`enumerate`]: every two-reflection path, and every four-reflection path.
 //! - [`grid`]: a grid of parallel rays traced along one ghost path at one wavelength.
 //! - [`bounds`]: where on the entrance plane the rays that reach the sensor start, per ghost
-//!   and incidence angle (approximate paraxial and precise traced modes), and the cheap
-//!   energy bound that culls four-reflection paths before anything is traced.
+//!   and incidence angle (approximate paraxial and precise traced modes).
+//! - [`four_bound`]: the traced upper bound on four-reflection paths' energy shares (one
+//!   trace per three-reflection prefix) that culls them before their bounds are traced.
 //! - [`render`]: one ghost into an HDR image — triangles with energy-conserving intensities,
 //!   the aperture's shape at the stop, feathered clipping, the diffraction-limit caustic bound.
 //! - [`table`]: bounds precomputed over a range of angles, stored and interpolated.
@@ -14,6 +15,7 @@
 
 pub mod bounds;
 pub mod enumerate;
+pub mod four_bound;
 pub mod grid;
 pub mod olf_table;
 pub mod render;
@@ -24,4 +26,5 @@ pub use enumerate::{
     GhostPath, ParseGhostPathError, ReflectionOrder, enumerate_four_reflection_ghosts,
     enumerate_ghosts, enumerate_ghosts_of_order, four_reflection_count, reflecting_surfaces,
 };
-pub use grid::{GridTrace, trace_grid, trace_grid_f64};
+pub use four_bound::FourReflectionBounds;
+pub use grid::{GridTrace, ProbedGrid, trace_grid, trace_grid_f64, trace_grid_probed};

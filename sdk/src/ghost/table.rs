@@ -2,8 +2,8 @@
 //! precompute`), stored as JSON (format in docs/formats.md) and interpolated between angles.
 //!
 //! A table holds every two-reflection ghost and, when computed with
-//! [`ReflectionOrder::Four`], the four-reflection ghosts whose energy bound
-//! ([`bounds::energy_bound`]) reaches the table's `four_reflection_bound_threshold` at some
+//! [`ReflectionOrder::Four`], the four-reflection ghosts whose traced energy bound
+//! ([`FourReflectionBounds`]) reaches the table's `four_reflection_bound_threshold` at some
 //! tabulated angle; the others are never traced.
 
 use rayon::prelude::*;
@@ -12,10 +12,11 @@ use serde::{Deserialize, Serialize};
 use crate::system::LensSystem;
 use crate::trace::InterfaceTableSet;
 
-use super::bounds::{self, BoundsMode, GhostBounds, ReflectanceBounds};
+use super::bounds::{self, BoundsMode, GhostBounds};
 use super::enumerate::{
     GhostPath, ReflectionOrder, enumerate_four_reflection_ghosts, enumerate_ghosts,
 };
+use super::four_bound::FourReflectionBounds;
 use super::grid::GridTrace;
 
 /// Identifies the file format.
@@ -135,20 +136,24 @@ impl BoundsTable {
         };
         let mut four_paths = None;
         if four {
-            // The cull before tracing: a path stays when its bound reaches the threshold at
-            // some angle.
-            let reflectances = ReflectanceBounds::new(system, &tables);
-            let scale = angles_deg
-                .iter()
-                .zip(&direct)
-                .map(|(&deg, &d)| bounds::energy_bound_scale(system, deg.to_radians(), d))
-                .fold(0.0, f64::max);
+            // The cull before tracing: a path stays when its traced prefix bound reaches the
+            // threshold at some tabulated angle.
             let all = enumerate_four_reflection_ghosts(system);
+            let mut largest = vec![0.0f64; all.len()];
+            for (&deg, &d) in angles_deg.iter().zip(&direct) {
+                let at = FourReflectionBounds::compute(system, &tables, deg.to_radians(), d);
+                for (l, p) in largest.iter_mut().zip(&all) {
+                    // Every path of the lens has a bound; keep one that had none.
+                    *l = l.max(at.get(p).unwrap_or(f64::INFINITY));
+                }
+            }
             four_paths = Some(all.len());
-            ghosts.extend(all.into_iter().filter(|p| {
-                bounds::energy_bound(&reflectances, p, scale)
-                    >= options.four_reflection_bound_threshold
-            }));
+            ghosts.extend(
+                all.iter()
+                    .zip(&largest)
+                    .filter(|&(_, &l)| l >= options.four_reflection_bound_threshold)
+                    .map(|(&p, _)| p),
+            );
         }
         start(ghosts.len());
         let direct_for_energy: Vec<f64> = match mode {

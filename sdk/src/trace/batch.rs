@@ -159,6 +159,126 @@ impl<T: Real> Sequence<T> {
     pub fn trace_packet(&self, p: &mut Packet<T>) {
         trace_packet_dispatch(&self.steps, &self.tables, p);
     }
+
+    /// Traces every ray of `batch` like [`Self::trace_batch`], on the calling thread, and at
+    /// each probed step records per ray what a reflection there would pass on: the ray's
+    /// weight as it arrives (the Fresnel/coating throughput of every step before) times the
+    /// probe's table at the ray's actual incidence cosine there — exactly the weight the ray
+    /// would carry after reflecting at that surface on a path that shares every step before
+    /// it — and 0 for a ray that has stopped (missed a surface, total internal reflection,
+    /// asphere failure) before or at the step, or that met a clear semi-diameter (this one
+    /// included) beyond [`PROBE_CLIP_SLACK`] × its radius. A total internal reflection *at*
+    /// the probed step is not a loss there: the ray is recorded with the probe's factor
+    /// (a reflectance table is 1 beyond the critical angle), then stops.
+    ///
+    /// `probes` are in increasing step order; `out` is resized to `packets × probes.len()`
+    /// rows of [`LANES`] values: row `packet * probes.len() + k` holds probe `k` for the
+    /// packet's rays (padding lanes hold meaningless values). Nothing is allocated while
+    /// tracing. Only the probes are the result: a packet stops being traced after the last
+    /// probe, or once all its rays are lost, so the batch's rays are left part-way.
+    pub fn trace_batch_probed(
+        &self,
+        batch: &mut RayBatch<T>,
+        probes: &[Probe<T>],
+        out: &mut Vec<[T; LANES]>,
+    ) {
+        debug_assert!(probes.windows(2).all(|w| w[0].step < w[1].step));
+        let k = probes.len();
+        out.clear();
+        out.resize(batch.packets.len() * k, [T::zero(); LANES]);
+        if k == 0 {
+            self.trace_batch_serial(batch);
+            return;
+        }
+        for (p, rows) in batch.packets.iter_mut().zip(out.chunks_mut(k)) {
+            trace_packet_probed_dispatch(&self.steps, &self.tables, probes, p, rows);
+        }
+    }
+}
+
+/// Slack on the clip test of [`Sequence::trace_batch_probed`]: a ray counts as inside a clear
+/// aperture up to this many radii. Grids decide "inside" on the square root of the squared
+/// relative radius rounded to f32 (`GridTrace::passes`), which lets through up to one ulp
+/// more than the packet's squared test; the slack keeps the probe on the generous side of
+/// that, so it never drops a ray a grid counts.
+pub const PROBE_CLIP_SLACK: f64 = 1.0 + 1e-5;
+
+/// A reflectance read at one step of a sequence by [`Sequence::trace_batch_probed`].
+#[derive(Clone, Debug)]
+pub struct Probe<T> {
+    /// Index of the step in [`Sequence::steps`].
+    pub step: usize,
+    /// The factor to read at the ray's incidence cosine there (a reflectance table).
+    pub table: InterfaceTable<T>,
+}
+
+/// [`trace_packet_dispatch`] with probes (see [`Sequence::trace_batch_probed`]).
+#[multiversion::multiversion(targets("x86_64+avx2+fma"))]
+fn trace_packet_probed_dispatch<T: Real>(
+    steps: &[Step<T>],
+    tables: &[InterfaceTable<T>],
+    probes: &[Probe<T>],
+    p: &mut Packet<T>,
+    out: &mut [[T; LANES]],
+) {
+    let slack2 = T::of(PROBE_CLIP_SLACK * PROBE_CLIP_SLACK);
+    let mut next = 0;
+    for (i, s) in steps.iter().enumerate() {
+        // Once every ray of the packet has stopped or been clipped, no later probe can read
+        // anything but 0 (the rows are zeroed): the rest of the steps are skipped.
+        let lost = |l: usize| p.fate[l] & TERMINATED != 0 || p.max_rel2[l] > slack2;
+        if next == probes.len() || (0..LANES).all(lost) {
+            break;
+        }
+        let table = s.table.map(|t| &tables[t as usize]);
+        match probes.get(next).filter(|pr| pr.step == i) {
+            Some(pr) => {
+                dispatch_step!(
+                    s,
+                    step_packet_probed,
+                    s,
+                    table,
+                    &pr.table,
+                    p,
+                    &mut out[next]
+                );
+                next += 1;
+            }
+            None => match table {
+                Some(t) => dispatch_step!(s, step_packet_weighted, s, t, p),
+                None => dispatch_step!(s, step_packet, s, p),
+            },
+        }
+        if s.record_stop {
+            p.stop_x = p.x;
+            p.stop_y = p.y;
+        }
+    }
+}
+
+/// A step that records, per lane, the weight as the ray arrives times `probe` at its
+/// incidence cosine, or 0 when the ray is lost by then (see [`Sequence::trace_batch_probed`]),
+/// then weights the rays as [`step_packet_weighted`] does (when the step has a table).
+#[inline(always)]
+fn step_packet_probed<T: Real, const MODE: u8, const SHAPE: u8>(
+    s: &Step<T>,
+    table: Option<&InterfaceTable<T>>,
+    probe: &InterfaceTable<T>,
+    p: &mut Packet<T>,
+    out: &mut [T; LANES],
+) {
+    let arriving = p.weight;
+    let mut cos = [T::zero(); LANES];
+    let mut open = [false; LANES];
+    step_lanes::<T, MODE, SHAPE, true>(s, p, &mut cos, &mut open);
+    for ((o, (&w, &c)), &open) in out.iter_mut().zip(arriving.iter().zip(&cos)).zip(&open) {
+        *o = if open { w * probe.at(c) } else { T::zero() };
+    }
+    if let Some(table) = table {
+        for (w, &c) in p.weight.iter_mut().zip(&cos) {
+            *w = *w * table.at(c);
+        }
+    }
 }
 
 /// The packet kernel, compiled for the baseline CPU and for AVX2 + FMA, chosen at run time.
@@ -190,7 +310,7 @@ fn step_packet_weighted<T: Real, const MODE: u8, const SHAPE: u8>(
     p: &mut Packet<T>,
 ) {
     let mut cos = [T::zero(); LANES];
-    step_lanes::<T, MODE, SHAPE>(s, p, &mut cos);
+    step_lanes::<T, MODE, SHAPE, false>(s, p, &mut cos, &mut [false; LANES]);
     for (w, &c) in p.weight.iter_mut().zip(&cos) {
         *w = *w * table.at(c);
     }
@@ -199,7 +319,7 @@ fn step_packet_weighted<T: Real, const MODE: u8, const SHAPE: u8>(
 #[inline(always)]
 fn step_packet<T: Real, const MODE: u8, const SHAPE: u8>(s: &Step<T>, p: &mut Packet<T>) {
     let mut cos = [T::zero(); LANES];
-    step_lanes::<T, MODE, SHAPE>(s, p, &mut cos);
+    step_lanes::<T, MODE, SHAPE, false>(s, p, &mut cos, &mut [false; LANES]);
 }
 
 #[inline(always)]
@@ -207,11 +327,22 @@ fn step_packet<T: Real, const MODE: u8, const SHAPE: u8>(s: &Step<T>, p: &mut Pa
     clippy::needless_range_loop,
     reason = "one index walks eight parallel lane arrays; this shape vectorises"
 )]
-fn step_lanes<T: Real, const MODE: u8, const SHAPE: u8>(
+#[allow(
+    clippy::neg_cmp_op_on_partial_ord,
+    reason = "`!(a > b)` in the probe is deliberate: true for NaN, which must count as open"
+)]
+/// One step for every lane; writes each lane's incidence cosine into `cos` and, when `PROBE`,
+/// whether the ray is still open after it into `open`: it had not stopped, it met this
+/// surface (a total internal reflection here counts as met), and no clear semi-diameter so
+/// far, this one included, clipped it beyond [`PROBE_CLIP_SLACK`]. Without `PROBE`, `open` is
+/// not written (the test compiles away).
+fn step_lanes<T: Real, const MODE: u8, const SHAPE: u8, const PROBE: bool>(
     s: &Step<T>,
     p: &mut Packet<T>,
     cos: &mut [T; LANES],
+    open: &mut [bool; LANES],
 ) {
+    let slack2 = T::of(PROBE_CLIP_SLACK * PROBE_CLIP_SLACK);
     let surface = s.surface;
     let vignetted = Fate::Vignetted { surface }.encode();
     let missed = Fate::Missed { surface }.encode();
@@ -231,6 +362,10 @@ fn step_lanes<T: Real, const MODE: u8, const SHAPE: u8>(
         let fail = out.missed | out.tir | out.no_convergence;
         let upd = alive & !fail;
         let rel2 = out.r2 * s.inv_semi2;
+        if PROBE {
+            // `!(x > limit)`: a NaN radius counts as open, on the generous side.
+            open[i] = alive & !(out.missed | out.no_convergence) & !(m0.max(rel2) > slack2);
+        }
         [p.x[i], p.y[i], p.z[i]] = pos;
         [p.dx[i], p.dy[i], p.dz[i]] = dir;
         p.max_rel2[i] = m0.max(if upd { rel2 } else { T::zero() });

@@ -18,7 +18,7 @@ mod real;
 mod scalar;
 mod sequence;
 
-pub use batch::{LANES, Packet, RayBatch};
+pub use batch::{LANES, PROBE_CLIP_SLACK, Packet, Probe, RayBatch};
 pub use fate::Fate;
 pub use real::Real;
 pub use scalar::{Hit, Ray, TraceResult};
