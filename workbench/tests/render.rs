@@ -98,20 +98,7 @@ fn reference_error_is_reported_and_small() {
 fn precomputed_bounds_give_the_same_ghosts() {
     let dir = temp_dir("render");
     let table = dir.join("heliar-bounds.json");
-    let out = flarebench(&[
-        "precompute",
-        "heliar-tronnier",
-        "-o",
-        table.to_str().unwrap(),
-        "--max-angle-deg",
-        "12",
-        "--quiet",
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    precompute_heliar_to_12_degrees(&table);
     let run = |extra: &[&str]| -> Value {
         let o = dir.join("p.exr");
         let mut a = vec![
@@ -483,6 +470,24 @@ fn an_aperture_mask_shapes_the_ghosts() {
 }
 
 /// OpenLensFlare's bounds file for the Heliar-Tronnier, as bundled for the tests.
+/// `flarebench precompute heliar-tronnier` over 0–12° into `table`.
+fn precompute_heliar_to_12_degrees(table: &std::path::Path) {
+    let out = flarebench(&[
+        "precompute",
+        "heliar-tronnier",
+        "-o",
+        table.to_str().unwrap(),
+        "--max-angle-deg",
+        "12",
+        "--quiet",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 fn olf_bounds_file() -> String {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../tests/data/heliar-tronnier-bounds-full.xml")
@@ -523,20 +528,7 @@ fn openlensflare_bounds_render_the_heliar_as_our_own_bounds_do() {
     let dir = temp_dir("render-olf");
     let olf = olf_bounds_file();
     let table = dir.join("heliar-bounds.json");
-    let out = flarebench(&[
-        "precompute",
-        "heliar-tronnier",
-        "-o",
-        table.to_str().unwrap(),
-        "--max-angle-deg",
-        "12",
-        "--quiet",
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    precompute_heliar_to_12_degrees(&table);
     for light in ["5,0", "10,30"] {
         let (plain, img_plain) = render_heliar(&dir, "plain", light, &[]);
         let (ours, img_ours) = render_heliar(
