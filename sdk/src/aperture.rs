@@ -245,6 +245,7 @@ impl ApertureSampler<'_> {
     /// bilinear transmission (already smooth at that scale); a wider one ramps on the mask's
     /// distance field, which treats the mask as open where it is at least 1/2 — grey levels
     /// inside are not kept (sample grey overlays with [`ApertureMask::transmission`]).
+    #[inline]
     pub fn transmission_soft(&self, u: f32, v: f32, feather: f32) -> f32 {
         #[allow(
             clippy::neg_cmp_op_on_partial_ord,
@@ -263,6 +264,7 @@ impl ApertureSampler<'_> {
     }
 
     /// See [`Aperture::signed_distance`].
+    #[inline]
     pub fn signed_distance(&self, u: f32, v: f32) -> f32 {
         match self.shape {
             Shape::Circle => {
@@ -277,6 +279,7 @@ impl ApertureSampler<'_> {
 
 /// The smooth step across an edge at signed distance `d` over a band of width `feather`:
 /// 1 well inside, 0 well outside, 1/2 on the edge, odd about it; a NaN distance gives 0.
+#[inline]
 fn smooth_edge(d: f64, feather: f64) -> f64 {
     let t = 0.5 - d / feather;
     let t = if t >= 1.0 {

@@ -504,7 +504,7 @@ fn sample_in_tile<const N: usize, F>(
     // First row (column) whose centre is at or after y (x): ⌈y − ½⌉, clamped to the tile.
     let (x0, y0) = (view.x0 as f64, view.y0 as f64);
     let first = |u: f64, lo: f64, len: usize| -> usize {
-        ((u - 0.5).ceil() - lo).clamp(0.0, len as f64) as usize
+        (ceil(u - 0.5) - lo).clamp(0.0, len as f64) as usize
     };
     let j0 = first(top[1], y0, view.height);
     let j1 = first(bottom[1], y0, view.height);
@@ -615,6 +615,14 @@ fn full_run(strip: &Polygon, y0: f64, i0: usize, i1: usize) -> (usize, usize) {
 #[inline]
 fn floor_index(x: f64) -> usize {
     x as usize
+}
+
+/// `⌈x⌉` for `|x| < 2⁶³` (NaN gives 0): `f64::ceil` is a libm call on baseline x86-64, and
+/// this is in the sampled rows' set-up.
+#[inline]
+fn ceil(x: f64) -> f64 {
+    let t = x as i64 as f64;
+    if t < x { t + 1.0 } else { t }
 }
 
 /// `⌈x⌉` as an index, for `x ≥ 0` (0 for negative or NaN).

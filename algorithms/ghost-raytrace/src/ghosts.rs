@@ -4,14 +4,17 @@
 //! Ghosts are grouped by their coarse-frame factor ([`GhostJob::downscale`]): each group is
 //! drawn into a coarse copy of the frame (full resolution for factor 1) and added to the
 //! output by bilinear upsampling (`flarebench_sdk::image::add_upsampled`). Within a group,
-//! ghosts are spread over the cores, each chunk of ghosts drawing into its own accumulator.
+//! the ghosts are traced and meshed in parallel, then all their triangles are rasterized in
+//! one pass, its tiles spread over the cores.
 //!
 //! [`GhostJob::downscale`]: crate::plan::GhostJob::downscale
 
 use flarebench_sdk::LensSystem;
 use flarebench_sdk::aperture::Aperture;
+use flarebench_sdk::ghost::GridTrace;
 use flarebench_sdk::ghost::render::{
-    BandRef, Frame, GhostContext, GhostLight, GhostScratch, GhostStats, render_ghost,
+    BandRef, Frame, GhostContext, GhostLight, GhostMesh, GhostStats, mesh_ghost,
+    rasterize_ghost_mesh,
 };
 use flarebench_sdk::image::{CoarseGrid, HdrImage, add_upsampled_into};
 use flarebench_sdk::paraxial::{analyse, stop_opening};
@@ -106,29 +109,46 @@ pub fn render_into(
     Ok(per_light)
 }
 
+/// Triangles (about) made before they are rasterized: bounds the memory a group's meshes
+/// take (about 40 bytes a vertex, 30 MB at this size) while keeping rasterizer calls few.
+const BATCH_TRIANGLES: usize = 1 << 18;
+
 /// Draws the ghosts `group` (`(factor, light, ghost)`) into one image of `ctx.frame`'s size,
-/// appending each ghost's statistics to `stats`.
+/// appending each ghost's statistics to `stats`. Each ghost's bands are traced and turned into
+/// triangles in parallel, in batches of about [`BATCH_TRIANGLES`]; each batch is rasterized in
+/// one pass (tiles in parallel), in plan order, so the image does not depend on the number
+/// of threads.
 fn render_group(
     ctx: &GhostContext<'_>,
     plans: &[LightPlan],
     group: &[(usize, usize, usize)],
     stats: &mut Vec<(usize, usize, GhostStats)>,
 ) -> HdrImage {
-    let frame = ctx.frame;
-    // One accumulator image per chunk of jobs: few chunks, so few images.
-    let chunk = (group.len() / (2 * rayon::current_num_threads())).max(1);
-    let (img, group_stats) = group
-        .par_iter()
-        .with_min_len(chunk)
-        .fold(
-            || {
-                (
-                    HdrImage::new(frame.width, frame.height),
-                    Vec::new(),
-                    GhostScratch::default(),
-                )
-            },
-            |(mut img, mut stats, mut scratch), &(_, l, g)| {
+    // Units of work: (index in `group`, band of that ghost), with their triangle counts.
+    let units: Vec<(usize, usize, usize)> = group
+        .iter()
+        .enumerate()
+        .flat_map(|(k, &(_, l, g))| {
+            let job = &plans[l].ghosts[g];
+            let triangles = 2 * (job.grid.max(2) - 1).pow(2);
+            (0..job.bands.len()).map(move |b| (k, b, triangles))
+        })
+        .collect();
+    let mut per_ghost = vec![GhostStats::default(); group.len()];
+    let mut img = HdrImage::new(ctx.frame.width, ctx.frame.height);
+    let mut all = GhostMesh::default();
+    let mut start = 0;
+    while start < units.len() {
+        let mut end = start + 1;
+        let mut triangles = units[start].2;
+        while end < units.len() && triangles + units[end].2 <= BATCH_TRIANGLES {
+            triangles += units[end].2;
+            end += 1;
+        }
+        let meshes: Vec<(GhostMesh, GhostStats)> = units[start..end]
+            .par_iter()
+            .map_init(GridTrace::default, |grid, &(k, b, triangles)| {
+                let (_, l, g) = group[k];
                 let lp = &plans[l];
                 let job = &lp.ghosts[g];
                 let light = GhostLight {
@@ -136,38 +156,37 @@ fn render_group(
                     phi: lp.light.phi_deg.to_radians(),
                     irradiance: 1.0,
                 };
-                let bands: Vec<BandRef<'_>> = job
-                    .bands
-                    .iter()
-                    .map(|b| BandRef {
-                        rgb: b.rgb,
-                        ..lp.bands[b.band].as_ref()
-                    })
-                    .collect();
-                let s = render_ghost(
+                let band = BandRef {
+                    rgb: job.bands[b].rgb,
+                    ..lp.bands[job.bands[b].band].as_ref()
+                };
+                let mut mesh = GhostMesh::with_capacity(triangles, triangles / 2);
+                let s = mesh_ghost(
                     ctx,
                     job.path,
                     &job.bounds,
                     job.grid,
                     &light,
-                    &bands,
-                    &mut scratch,
-                    &mut img,
+                    &[band],
+                    grid,
+                    &mut mesh,
                 );
-                stats.push((l, g, s));
-                (img, stats, scratch)
-            },
-        )
-        .map(|(img, stats, _)| (img, stats))
-        .reduce(
-            || (HdrImage::new(frame.width, frame.height), Vec::new()),
-            |(mut a, mut sa), (b, sb)| {
-                a.add_image(&b)
-                    .expect("every accumulator has the frame's size");
-                sa.extend(sb);
-                (a, sa)
-            },
-        );
-    stats.extend(group_stats);
+                (mesh, s)
+            })
+            .collect();
+        all.clear();
+        all.reserve(meshes.iter().map(|(m, _)| m));
+        for ((mesh, s), &(k, _, _)) in meshes.iter().zip(&units[start..end]) {
+            all.append(mesh);
+            let t = &mut per_ghost[k];
+            t.rays += s.rays;
+            t.triangles += s.triangles;
+            t.flux += s.flux;
+        }
+        drop(meshes);
+        rasterize_ghost_mesh(&mut img, &all, ctx.aperture);
+        start = end;
+    }
+    stats.extend(group.iter().zip(per_ghost).map(|(&(_, l, g), s)| (l, g, s)));
     img
 }

@@ -129,17 +129,130 @@ pub struct GhostStats {
     pub flux: f64,
 }
 
+/// Triangles with `N` attributes each, three vertices of their own per triangle.
+#[derive(Clone, Debug, Default)]
+pub struct Mesh<const N: usize> {
+    pub positions: Vec<[f32; 2]>,
+    pub attrs: Vec<[f32; N]>,
+    pub triangles: Vec<[u32; 3]>,
+}
+
+impl<const N: usize> Mesh<N> {
+    /// An empty mesh with room for `triangles` triangles.
+    pub fn with_capacity(triangles: usize) -> Self {
+        Mesh {
+            positions: Vec::with_capacity(3 * triangles),
+            attrs: Vec::with_capacity(3 * triangles),
+            triangles: Vec::with_capacity(triangles),
+        }
+    }
+
+    /// Makes room for `triangles` more triangles.
+    pub fn reserve(&mut self, triangles: usize) {
+        self.positions.reserve(3 * triangles);
+        self.attrs.reserve(3 * triangles);
+        self.triangles.reserve(triangles);
+    }
+
+    /// Removes every triangle, keeping the buffers.
+    pub fn clear(&mut self) {
+        self.positions.clear();
+        self.attrs.clear();
+        self.triangles.clear();
+    }
+
+    /// Number of triangles.
+    pub fn len(&self) -> usize {
+        self.triangles.len()
+    }
+
+    /// True without triangles.
+    pub fn is_empty(&self) -> bool {
+        self.triangles.is_empty()
+    }
+
+    /// Adds a triangle with corners `p` (pixels) and their attributes `a`.
+    pub fn push(&mut self, p: [[f32; 2]; 3], a: [[f32; N]; 3]) {
+        let base = self.positions.len() as u32;
+        self.positions.extend_from_slice(&p);
+        self.attrs.extend_from_slice(&a);
+        self.triangles.push([base, base + 1, base + 2]);
+    }
+
+    /// Adds every triangle of `other` after this mesh's own.
+    pub fn append(&mut self, other: &Mesh<N>) {
+        let base = self.positions.len() as u32;
+        self.positions.extend_from_slice(&other.positions);
+        self.attrs.extend_from_slice(&other.attrs);
+        self.triangles
+            .extend(other.triangles.iter().map(|t| t.map(|i| i + base)));
+    }
+}
+
+/// Attributes of a wholly open triangle's corner: its RGB irradiance (image units per
+/// pixel²).
+pub type OpenAttrs = [f32; 3];
+
+/// Attributes of an edge triangle's corner: RGB irradiance before the edges, the stop
+/// crossing `u`, `v` in the lens's frame, the largest relative radius, the feather width (the
+/// same at every corner) and 1 where the aperture's outline must be evaluated (0 where the
+/// triangle lies wholly inside the opening: only the clip radius cuts it).
+pub type EdgeAttrs = [f32; 8];
+
+/// Ghost triangles ready to rasterize (any number of ghosts and bands): the wholly open ones,
+/// whose shade is their interpolated irradiance, and those on an edge (the clip radius or the
+/// aperture's outline), which are feathered per pixel ([`rasterize_ghost_mesh`]).
+#[derive(Clone, Debug, Default)]
+pub struct GhostMesh {
+    pub open: Mesh<3>,
+    pub edge: Mesh<8>,
+}
+
+impl GhostMesh {
+    /// An empty mesh with room for `open` wholly open and `edge` edge triangles.
+    pub fn with_capacity(open: usize, edge: usize) -> Self {
+        GhostMesh {
+            open: Mesh::with_capacity(open),
+            edge: Mesh::with_capacity(edge),
+        }
+    }
+
+    /// Removes every triangle, keeping the buffers.
+    pub fn clear(&mut self) {
+        self.open.clear();
+        self.edge.clear();
+    }
+
+    /// Number of triangles.
+    pub fn len(&self) -> usize {
+        self.open.len() + self.edge.len()
+    }
+
+    /// True without triangles.
+    pub fn is_empty(&self) -> bool {
+        self.open.is_empty() && self.edge.is_empty()
+    }
+
+    /// Makes room for the triangles of `meshes`.
+    pub fn reserve<'a>(&mut self, meshes: impl Iterator<Item = &'a GhostMesh> + Clone) {
+        let open: usize = meshes.clone().map(|m| m.open.len()).sum();
+        let edge: usize = meshes.map(|m| m.edge.len()).sum();
+        self.open.reserve(open);
+        self.edge.reserve(edge);
+    }
+
+    /// Adds every triangle of `other` after this mesh's own.
+    pub fn append(&mut self, other: &GhostMesh) {
+        self.open.append(&other.open);
+        self.edge.append(&other.edge);
+    }
+}
+
 /// Reusable buffers for [`render_ghost`].
 #[derive(Debug, Default)]
 pub struct GhostScratch {
     grid: GridTrace,
-    positions: Vec<[f32; 2]>,
-    attrs: Vec<[f32; 5]>,
-    triangles: Vec<[u32; 3]>,
-    /// Triangles wholly inside the open aperture and the clip radius: irradiance × weight.
-    inner_positions: Vec<[f32; 2]>,
-    inner_attrs: Vec<[f32; 1]>,
-    inner_triangles: Vec<[u32; 3]>,
+    mesh: GhostMesh,
 }
 
 /// Everything fixed for a frame: lens data the renderer needs per ghost.
@@ -158,7 +271,7 @@ pub struct GhostContext<'a> {
 }
 
 /// Renders `path` lit by `light` into `img` with an `n × n` grid over `bounds.entrance`, one
-/// trace per band.
+/// trace per band: [`mesh_ghost`], then [`rasterize_ghost_mesh`].
 #[allow(clippy::too_many_arguments)]
 pub fn render_ghost(
     ctx: &GhostContext<'_>,
@@ -169,6 +282,34 @@ pub fn render_ghost(
     bands: &[BandRef<'_>],
     scratch: &mut GhostScratch,
     img: &mut HdrImage,
+) -> GhostStats {
+    scratch.mesh.clear();
+    let stats = mesh_ghost(
+        ctx,
+        path,
+        bounds,
+        n,
+        light,
+        bands,
+        &mut scratch.grid,
+        &mut scratch.mesh,
+    );
+    rasterize_ghost_mesh(img, &scratch.mesh, ctx.aperture);
+    stats
+}
+
+/// Traces `path` lit by `light` with an `n × n` grid over `bounds.entrance` at each band and
+/// appends its triangles, in pixels of `ctx.frame`, to `mesh`.
+#[allow(clippy::too_many_arguments)]
+pub fn mesh_ghost(
+    ctx: &GhostContext<'_>,
+    path: GhostPath,
+    bounds: &GhostBounds,
+    n: usize,
+    light: &GhostLight,
+    bands: &[BandRef<'_>],
+    grid: &mut GridTrace,
+    mesh: &mut GhostMesh,
 ) -> GhostStats {
     let mut stats = GhostStats::default();
     let (sphi, cphi) = light.phi.sin_cos();
@@ -186,14 +327,7 @@ pub fn render_ghost(
         // radius clip must not clip there a second time.
         let seq = seq.with_tables_from(band.tables).aperture_by_mask();
         if ctx.trace_f64 {
-            trace_grid_f64(
-                &seq,
-                light.theta,
-                bounds.entrance,
-                n,
-                ctx.stop_radius,
-                &mut scratch.grid,
-            );
+            trace_grid_f64(&seq, light.theta, bounds.entrance, n, ctx.stop_radius, grid);
         } else {
             trace_grid(
                 &seq.cast::<f32>(),
@@ -201,21 +335,15 @@ pub fn render_ghost(
                 bounds.entrance,
                 n,
                 ctx.stop_radius,
-                &mut scratch.grid,
+                grid,
             );
         }
-        let g = &scratch.grid;
+        let g = &*grid;
         stats.rays += n * n;
         // Smallest sensor area a triangle may have: the Airy disc.
         let airy = 1.22 * band.lambda_nm * 1e-6 * ctx.f_number;
         let min_area = std::f64::consts::PI * airy * airy;
         let half_cell = 0.5 * g.cell_area() * cos_t;
-        scratch.positions.clear();
-        scratch.attrs.clear();
-        scratch.triangles.clear();
-        scratch.inner_positions.clear();
-        scratch.inner_attrs.clear();
-        scratch.inner_triangles.clear();
         let rot = |k: usize| {
             let [x, y] = g.sensor[k].map(f64::from);
             [x * cphi - y * sphi, x * sphi + y * cphi]
@@ -227,8 +355,8 @@ pub fn render_ghost(
             let [u, v] = g.stop_uv[k];
             [u * c32 - v * s32, u * s32 + v * c32]
         };
-        let lum =
-            0.2126 * band.rgb[0] as f64 + 0.7152 * band.rgb[1] as f64 + 0.0722 * band.rgb[2] as f64;
+        let rgb = band.rgb;
+        let lum = 0.2126 * rgb[0] as f64 + 0.7152 * rgb[1] as f64 + 0.0722 * rgb[2] as f64;
         for j in 0..n - 1 {
             for i in 0..n - 1 {
                 let k00 = j * n + i;
@@ -269,62 +397,74 @@ pub fn render_ghost(
                         2.0 * r * r
                     };
                     let irr = (half_cell / area * light.irradiance * px_area) as f32;
-                    // Wholly open: inside the clip radius and (for a convex opening) the
-                    // aperture, by half a feather, at every corner — so everywhere inside.
-                    let open = convex
+                    let pixels = p.map(|q| frame.to_pixel(q[0], q[1]));
+                    let colour = |k: usize| {
+                        let e = irr * g.weight[k];
+                        [rgb[0] * e, rgb[1] * e, rgb[2] * e]
+                    };
+                    // Inside the clip radius, and (for a convex opening) inside the aperture,
+                    // by half a feather at every corner — so everywhere inside.
+                    let radius_open = tri.iter().all(|&k| g.max_rel[k] <= 1.0 - 0.5 * feather);
+                    let aperture_open = convex
                         && tri.iter().all(|&k| {
                             let [u, v] = stop_uv(k);
-                            g.max_rel[k] <= 1.0 - 0.5 * feather
-                                && aperture.signed_distance(u, v) <= -0.5 * feather
+                            aperture.signed_distance(u, v) <= -0.5 * feather
                         });
-                    if open {
-                        let base = scratch.inner_positions.len() as u32;
-                        for (q, &k) in p.iter().zip(&tri) {
-                            scratch.inner_positions.push(frame.to_pixel(q[0], q[1]));
-                            scratch.inner_attrs.push([irr * g.weight[k]]);
-                        }
-                        scratch.inner_triangles.push([base, base + 1, base + 2]);
+                    if radius_open && aperture_open {
+                        mesh.open.push(pixels, tri.map(colour));
                     } else {
-                        let base = scratch.positions.len() as u32;
-                        for (q, &k) in p.iter().zip(&tri) {
-                            scratch.positions.push(frame.to_pixel(q[0], q[1]));
-                            let [u, v] = stop_uv(k);
-                            scratch.attrs.push([irr, g.weight[k], u, v, g.max_rel[k]]);
-                        }
-                        scratch.triangles.push([base, base + 1, base + 2]);
+                        let flag = if aperture_open { 0.0 } else { 1.0 };
+                        mesh.edge.push(
+                            pixels,
+                            tri.map(|k| {
+                                let [r, gr, b] = colour(k);
+                                let [u, v] = stop_uv(k);
+                                [r, gr, b, u, v, g.max_rel[k], feather, flag]
+                            }),
+                        );
                     }
                     let w_mean = tri.iter().map(|&k| g.weight[k] as f64).sum::<f64>() / 3.0;
                     stats.flux += half_cell * light.irradiance * w_mean * lum;
+                    stats.triangles += 1;
                 }
             }
         }
-        stats.triangles += scratch.triangles.len() + scratch.inner_triangles.len();
-        let rgb = band.rgb;
-        let coverage = Coverage::Sampled {
-            min_area: SAMPLED_MIN_AREA,
-        };
-        rasterize_with(
-            img,
-            &scratch.inner_positions,
-            &scratch.inner_attrs,
-            &scratch.inner_triangles,
-            coverage,
-            |a: &[f32; 1]| [rgb[0] * a[0], rgb[1] * a[0], rgb[2] * a[0]],
-        );
-        rasterize_with(
-            img,
-            &scratch.positions,
-            &scratch.attrs,
-            &scratch.triangles,
-            coverage,
-            |a: &[f32; 5]| {
-                let clip = smoothstep(1.0 + 0.5 * feather, 1.0 - 0.5 * feather, a[4]);
-                let t = a[0] * a[1] * clip * aperture.transmission_soft(a[2], a[3], feather);
-                [rgb[0] * t, rgb[1] * t, rgb[2] * t]
-            },
-        );
     }
     stats
+}
+
+/// Rasterizes `mesh` (made by [`mesh_ghost`] for a frame of `img`'s size) into `img`: the open
+/// triangles at their interpolated irradiance, the edge ones feathered at the clip radius
+/// and, where flagged, at `aperture`'s outline. Triangles of at least [`SAMPLED_MIN_AREA`]
+/// pixels² are point-sampled.
+pub fn rasterize_ghost_mesh(img: &mut HdrImage, mesh: &GhostMesh, aperture: &Aperture) {
+    let coverage = Coverage::Sampled {
+        min_area: SAMPLED_MIN_AREA,
+    };
+    let aperture = aperture.sampler();
+    rasterize_with(
+        img,
+        &mesh.open.positions,
+        &mesh.open.attrs,
+        &mesh.open.triangles,
+        coverage,
+        |a: &OpenAttrs| *a,
+    );
+    rasterize_with(
+        img,
+        &mesh.edge.positions,
+        &mesh.edge.attrs,
+        &mesh.edge.triangles,
+        coverage,
+        |a: &EdgeAttrs| {
+            let feather = a[6];
+            let mut t = smoothstep(1.0 + 0.5 * feather, 1.0 - 0.5 * feather, a[5]);
+            if a[7] > 0.5 {
+                t *= aperture.transmission_soft(a[3], a[4], feather);
+            }
+            [a[0] * t, a[1] * t, a[2] * t]
+        },
+    );
 }
 
 /// Width of the ghost's edge (the clip at relative radius 1 and the aperture's outline), in
