@@ -8,7 +8,7 @@ mod upsample;
 
 use serde::Serialize;
 
-pub use upsample::{CoarseGrid, add_upsampled, add_upsampled_into};
+pub use upsample::{CoarseGrid, add_upsampled, add_upsampled_into, add_upsampled_levels_into};
 
 use crate::color::srgb::LUMINANCE_WEIGHTS;
 

@@ -93,7 +93,32 @@ pub fn rasterize_with<const N: usize, F>(
         img.width * img.height,
         "HdrImage invariant: pixels.len() == width * height"
     );
-    let (width, height) = (img.width, img.height);
+    rasterize_into(
+        &mut img.pixels,
+        img.width,
+        positions,
+        attrs,
+        triangles,
+        coverage,
+        shade,
+    );
+}
+
+/// [`rasterize_with`] into a row-major pixel buffer `width` pixels wide (a host's buffer,
+/// say), whose height is `pixels.len() / width` (whole rows; a partial last row is left
+/// alone).
+pub fn rasterize_into<const N: usize, F>(
+    pixels: &mut [[f32; 3]],
+    width: usize,
+    positions: &[[f32; 2]],
+    attrs: &[[f32; N]],
+    triangles: &[[u32; 3]],
+    coverage: Coverage,
+    shade: F,
+) where
+    F: Fn(&[f32; N]) -> [f32; 3] + Sync,
+{
+    let height = pixels.len().checked_div(width).unwrap_or(0);
     if width == 0 || height == 0 || triangles.is_empty() {
         return;
     }
@@ -122,7 +147,7 @@ pub fn rasterize_with<const N: usize, F>(
             }
         })
         .collect();
-    for (y, row) in img.pixels.chunks_exact_mut(width).enumerate() {
+    for (y, row) in pixels.chunks_exact_mut(width).enumerate() {
         let ty = y / TILE_SIZE;
         if bins.tile_is_empty_row(ty, tiles_x) {
             continue;

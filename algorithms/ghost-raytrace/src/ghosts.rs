@@ -3,7 +3,9 @@
 //!
 //! Ghosts are grouped by their coarse-frame factor ([`GhostJob::downscale`]): each group is
 //! drawn into a coarse copy of the frame (full resolution for factor 1) and added to the
-//! output by bilinear upsampling (`flarebench_sdk::image::add_upsampled`). Within a group,
+//! output by bilinear upsampling, all coarse frames in one pass
+//! (`flarebench_sdk::image::add_upsampled_levels_into`); full-resolution ghosts are drawn
+//! straight into the output. Within a group,
 //! the ghosts are traced and meshed in parallel, then all their triangles are rasterized in
 //! one pass, its tiles spread over the cores.
 //!
@@ -14,9 +16,9 @@ use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::ghost::GridTrace;
 use flarebench_sdk::ghost::render::{
     BandRef, Frame, GhostContext, GhostLight, GhostMesh, GhostStats, mesh_ghost,
-    rasterize_ghost_mesh,
+    rasterize_ghost_mesh_into,
 };
-use flarebench_sdk::image::{CoarseGrid, HdrImage, add_upsampled_into};
+use flarebench_sdk::image::{CoarseGrid, HdrImage, add_upsampled_levels_into};
 use flarebench_sdk::paraxial::{analyse, stop_opening};
 use flarebench_sdk::spectrum::LAMBDA_D_NM;
 use rayon::prelude::*;
@@ -85,6 +87,7 @@ pub fn render_into(
         .collect();
     jobs.sort_unstable();
     let mut stats = Vec::with_capacity(jobs.len());
+    let mut coarse = Vec::new();
     for group in jobs.chunk_by(|a, b| a.0 == b.0) {
         let grid = CoarseGrid::for_frame(frame.width, frame.height, group[0].0);
         let ctx = GhostContext {
@@ -95,9 +98,18 @@ pub fn render_into(
             f_number: p.f_number,
             trace_f64: options.trace_f64,
         };
-        let coarse = render_group(&ctx, plans, group, &mut stats);
-        add_upsampled_into(out, frame.width, &coarse, &grid);
+        if grid.factor == 1 {
+            // Full resolution: straight into the output.
+            render_group(&ctx, plans, group, &mut stats, out, frame.width);
+        } else {
+            let mut img = HdrImage::new(grid.width, grid.height);
+            render_group(&ctx, plans, group, &mut stats, &mut img.pixels, grid.width);
+            coarse.push((img, grid));
+        }
     }
+    // Every coarse frame added in one pass over the output.
+    let levels: Vec<(&HdrImage, &CoarseGrid)> = coarse.iter().map(|(i, g)| (i, g)).collect();
+    add_upsampled_levels_into(out, frame.width, &levels);
     stats.sort_by_key(|&(l, g, _)| (l, g));
     let mut per_light: Vec<Vec<GhostStats>> = plans
         .iter()
@@ -113,8 +125,8 @@ pub fn render_into(
 /// take (about 40 bytes a vertex, 30 MB at this size) while keeping rasterizer calls few.
 const BATCH_TRIANGLES: usize = 1 << 18;
 
-/// Draws the ghosts `group` (`(factor, light, ghost)`) into one image of `ctx.frame`'s size,
-/// appending each ghost's statistics to `stats`. Each ghost's bands are traced and turned into
+/// Adds the ghosts `group` (`(factor, light, ghost)`) into `pixels`, a row-major buffer of
+/// `ctx.frame`'s size (`width` pixels wide), appending each ghost's statistics to `stats`. Each ghost's bands are traced and turned into
 /// triangles in parallel, in batches of about [`BATCH_TRIANGLES`]; each batch is rasterized in
 /// one pass (tiles in parallel), in plan order, so the image does not depend on the number
 /// of threads.
@@ -123,7 +135,9 @@ fn render_group(
     plans: &[LightPlan],
     group: &[(usize, usize, usize)],
     stats: &mut Vec<(usize, usize, GhostStats)>,
-) -> HdrImage {
+    pixels: &mut [[f32; 3]],
+    width: usize,
+) {
     // Units of work: (index in `group`, band of that ghost), with their triangle counts.
     let units: Vec<(usize, usize, usize)> = group
         .iter()
@@ -135,7 +149,6 @@ fn render_group(
         })
         .collect();
     let mut per_ghost = vec![GhostStats::default(); group.len()];
-    let mut img = HdrImage::new(ctx.frame.width, ctx.frame.height);
     let mut all = GhostMesh::default();
     let mut start = 0;
     while start < units.len() {
@@ -184,9 +197,8 @@ fn render_group(
             t.flux += s.flux;
         }
         drop(meshes);
-        rasterize_ghost_mesh(&mut img, &all, ctx.aperture);
+        rasterize_ghost_mesh_into(pixels, width, &all, ctx.aperture);
         start = end;
     }
     stats.extend(group.iter().zip(per_ghost).map(|(&(_, l, g), s)| (l, g, s)));
-    img
 }

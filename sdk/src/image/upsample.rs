@@ -85,44 +85,70 @@ pub fn add_upsampled_into(
     coarse: &HdrImage,
     grid: &CoarseGrid,
 ) {
-    assert_eq!(
-        (coarse.width, coarse.height),
-        (grid.width, grid.height),
-        "the coarse image has the grid's size"
-    );
-    if width == 0 || dst.is_empty() || grid.width == 0 || grid.height == 0 {
+    add_upsampled_levels_into(dst, width, &[(coarse, grid)]);
+}
+
+/// Adds several coarse images (each laid out by its grid, any factors) to `dst` in one pass
+/// over it: each pixel gets the sum of every level's bilinear interpolation, as
+/// [`add_upsampled_into`] level by level would give (up to the order of the f32 sums), but
+/// reading and writing the full-resolution buffer once.
+///
+/// # Panics
+/// If a coarse image is not its grid's size, or `dst.len()` is not a multiple of `width`.
+pub fn add_upsampled_levels_into(
+    dst: &mut [[f32; 3]],
+    width: usize,
+    levels: &[(&HdrImage, &CoarseGrid)],
+) {
+    for (coarse, grid) in levels {
+        assert_eq!(
+            (coarse.width, coarse.height),
+            (grid.width, grid.height),
+            "the coarse image has the grid's size"
+        );
+    }
+    let levels: Vec<_> = levels
+        .iter()
+        .filter(|(_, g)| g.width > 0 && g.height > 0)
+        .collect();
+    if width == 0 || dst.is_empty() || levels.is_empty() {
         return;
     }
     assert_eq!(dst.len() % width, 0, "whole rows");
     let height = dst.len() / width;
-    if grid.factor == 1 && grid.width == width && grid.height == height {
-        for (o, p) in dst.iter_mut().zip(&coarse.pixels) {
-            for c in 0..3 {
-                o[c] += p[c];
-            }
-        }
-        return;
-    }
-    let norm = 1.0 / (grid.factor * grid.factor) as f32;
-    let xs = axis_weights(width, grid.width, grid.factor, grid.offset[0]);
-    let ys = axis_weights(height, grid.height, grid.factor, grid.offset[1]);
-    let cw = grid.width;
-    dst.par_chunks_mut(width).zip(ys.par_iter()).for_each_init(
-        || vec![[0.0_f32; 3]; cw],
-        |blend, (row, &(j0, j1, ty))| {
-            let (r0, r1) = (
-                &coarse.pixels[j0 * cw..(j0 + 1) * cw],
-                &coarse.pixels[j1 * cw..(j1 + 1) * cw],
-            );
-            for ((b, a0), a1) in blend.iter_mut().zip(r0).zip(r1) {
-                for c in 0..3 {
-                    b[c] = norm * (a0[c] + ty * (a1[c] - a0[c]));
+    // Per level: the norm, and the weights along each axis.
+    let setup: Vec<_> = levels
+        .iter()
+        .map(|(coarse, grid)| {
+            (
+                *coarse,
+                grid.width,
+                1.0 / (grid.factor * grid.factor) as f32,
+                axis_weights(width, grid.width, grid.factor, grid.offset[0]),
+                axis_weights(height, grid.height, grid.factor, grid.offset[1]),
+            )
+        })
+        .collect();
+    let widest = setup.iter().map(|l| l.1).max().unwrap_or(0);
+    dst.par_chunks_mut(width).enumerate().for_each_init(
+        || vec![[0.0_f32; 3]; widest],
+        |blend, (y, row)| {
+            for (coarse, cw, norm, xs, ys) in &setup {
+                let (j0, j1, ty) = ys[y];
+                let (r0, r1) = (
+                    &coarse.pixels[j0 * cw..(j0 + 1) * cw],
+                    &coarse.pixels[j1 * cw..(j1 + 1) * cw],
+                );
+                for ((b, a0), a1) in blend.iter_mut().zip(r0).zip(r1) {
+                    for c in 0..3 {
+                        b[c] = norm * (a0[c] + ty * (a1[c] - a0[c]));
+                    }
                 }
-            }
-            for (p, &(i0, i1, tx)) in row.iter_mut().zip(&xs) {
-                let (a, b) = (blend[i0], blend[i1]);
-                for c in 0..3 {
-                    p[c] += a[c] + tx * (b[c] - a[c]);
+                for (p, &(i0, i1, tx)) in row.iter_mut().zip(xs) {
+                    let (a, b) = (blend[i0], blend[i1]);
+                    for c in 0..3 {
+                        p[c] += a[c] + tx * (b[c] - a[c]);
+                    }
                 }
             }
         },
@@ -190,5 +216,44 @@ mod tests {
         let mut dst = HdrImage::new(5, 3);
         add_upsampled(&mut dst, &coarse, &grid);
         assert!(dst.pixels.iter().all(|p| *p == [1.0; 3]));
+    }
+
+    #[test]
+    fn levels_in_one_pass_match_level_by_level() {
+        let (w, h) = (37, 23);
+        let mut seq = HdrImage::new(w, h);
+        for (k, p) in seq.pixels.iter_mut().enumerate() {
+            *p = [k as f32 * 0.01, 1.0, 0.5];
+        }
+        let mut fused = seq.clone();
+        let levels: Vec<(HdrImage, CoarseGrid)> = [1, 2, 4, 8, 16]
+            .iter()
+            .map(|&f| {
+                let grid = CoarseGrid::for_frame(w, h, f);
+                let mut img = HdrImage::new(grid.width, grid.height);
+                for (k, p) in img.pixels.iter_mut().enumerate() {
+                    let v = ((k * 7919 + f) % 13) as f32;
+                    *p = [v, 2.0 * v, f as f32];
+                }
+                (img, grid)
+            })
+            .collect();
+        for (img, grid) in &levels {
+            add_upsampled_into(&mut seq.pixels, w, img, grid);
+        }
+        let refs: Vec<(&HdrImage, &CoarseGrid)> = levels.iter().map(|(i, g)| (i, g)).collect();
+        add_upsampled_levels_into(&mut fused.pixels, w, &refs);
+        for (a, b) in seq.pixels.iter().zip(&fused.pixels) {
+            for c in 0..3 {
+                assert!(
+                    (a[c] - b[c]).abs() <= 1e-5 * a[c].abs().max(1.0),
+                    "{a:?} {b:?}"
+                );
+            }
+        }
+        // No levels: nothing changes.
+        let before = fused.clone();
+        add_upsampled_levels_into(&mut fused.pixels, w, &[]);
+        assert_eq!(fused, before);
     }
 }

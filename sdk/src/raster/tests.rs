@@ -198,6 +198,34 @@ fn empty_images_and_empty_meshes_are_fine() {
     assert_eq!(img.sum(), [0.0; 3]);
 }
 
+/// A bare pixel buffer is drawn exactly as the image holding it; a partial last row (a
+/// buffer that is not whole rows) is left alone, as is a zero width.
+#[test]
+fn a_pixel_buffer_is_drawn_as_its_image() {
+    let pts = [
+        [1.3, 0.2],
+        [9.7, 4.1],
+        [2.2, 6.9],
+        [0.0, 0.0],
+        [70.0, 3.0],
+        [3.0, 70.0],
+    ];
+    let tris = [[0, 1, 2], [3, 4, 5]];
+    let attrs = vec![[0.0_f32; 0]; pts.len()];
+    for coverage in [Coverage::Exact, Coverage::Sampled { min_area: 2.0 }] {
+        let mut img = HdrImage::new(11, 7);
+        rasterize_with(&mut img, &pts, &attrs, &tris, coverage, |_| [1.0, 2.0, 3.0]);
+        let mut buf = vec![[0.0_f32; 3]; 11 * 7 + 4];
+        rasterize_into(&mut buf, 11, &pts, &attrs, &tris, coverage, |_| {
+            [1.0, 2.0, 3.0]
+        });
+        assert_eq!(&buf[..77], &img.pixels[..]);
+        assert!(buf[77..].iter().all(|p| *p == [0.0; 3]));
+        rasterize_into(&mut buf, 0, &pts, &attrs, &tris, coverage, |_| [1.0; 3]);
+        assert_eq!(&buf[..77], &img.pixels[..]);
+    }
+}
+
 /// Tiles add their triangles in input order, so the image is the same bit for bit on one
 /// thread or many.
 #[test]
