@@ -533,16 +533,23 @@ fn sample_in_tile<const N: usize, F>(
     };
     let j0 = first(top[1], y0, view.height);
     let j1 = first(bottom[1], y0, view.height);
-    let cross =
-        |a: [f64; 2], b: [f64; 2], y: f64| a[0] + (y - a[1]) * ((b[0] - a[0]) / (b[1] - a[1]));
+    // Each edge's inverse slope, from its sorted endpoints: the same bits wherever the edge
+    // is shared (a horizontal edge's is never used: no row centre lies strictly inside it).
+    let inverse_slope = |a: [f64; 2], b: [f64; 2]| (b[0] - a[0]) / (b[1] - a[1]);
+    let (long, upper, lower) = (
+        inverse_slope(top, bottom),
+        inverse_slope(top, mid),
+        inverse_slope(mid, bottom),
+    );
+    let cross = |a: [f64; 2], slope: f64, y: f64| a[0] + (y - a[1]) * slope;
     let step = tri.x_step();
     for j in j0..j1 {
         let yc = y0 + j as f64 + 0.5;
-        let xa = cross(top, bottom, yc);
+        let xa = cross(top, long, yc);
         let xb = if yc < mid[1] {
-            cross(top, mid, yc)
+            cross(top, upper, yc)
         } else {
-            cross(mid, bottom, yc)
+            cross(mid, lower, yc)
         };
         let (xl, xr) = if xa <= xb { (xa, xb) } else { (xb, xa) };
         let i0 = first(xl, x0, view.width);
