@@ -354,6 +354,13 @@ impl<const N: usize> Setup<N> {
         std::array::from_fn(|k| d1 * self.d1[k] + d2 * self.d2[k])
     }
 
+    /// Change of the attributes from one pixel to the next along y.
+    #[inline]
+    fn y_step(&self) -> [f32; N] {
+        let (d1, d2) = (self.bary[0][1] as f32, self.bary[1][1] as f32);
+        std::array::from_fn(|k| d1 * self.d1[k] + d2 * self.d2[k])
+    }
+
     /// Attributes at `p` (tile coordinates): barycentric weights clamped to the triangle, so
     /// that rounding can never extrapolate beyond the vertices' values.
     #[inline]
@@ -542,7 +549,12 @@ fn sample_in_tile<const N: usize, F>(
         inverse_slope(mid, bottom),
     );
     let cross = |a: [f64; 2], slope: f64, y: f64| a[0] + (y - a[1]) * slope;
+    // The attributes are affine: at a pixel centre, those of vertex 0 plus the steps along x
+    // and y times the centre's offset from it (inside the triangle, so no clamping is
+    // needed; the offsets, at most a tile across, are exact enough in f32).
     let step = tri.x_step();
+    let step_y = tri.y_step();
+    let v0 = tri.v[0];
     for j in j0..j1 {
         let yc = y0 + j as f64 + 0.5;
         let xa = cross(top, long, yc);
@@ -557,7 +569,11 @@ fn sample_in_tile<const N: usize, F>(
         if i0 >= i1 {
             continue;
         }
-        let mut a = tri.interpolate([i0 as f64 + 0.5, j as f64 + 0.5]);
+        let (dx, dy) = (
+            (i0 as f64 + 0.5 - v0[0]) as f32,
+            (j as f64 + 0.5 - v0[1]) as f32,
+        );
+        let mut a: [f32; N] = std::array::from_fn(|k| tri.a0[k] + dx * step[k] + dy * step_y[k]);
         for px in &mut view.rows[j][i0..i1] {
             let value = shade(&a);
             px[0] += value[0];
