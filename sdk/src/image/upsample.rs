@@ -116,16 +116,30 @@ pub fn add_upsampled_levels_into(
     }
     assert_eq!(dst.len() % width, 0, "whole rows");
     let height = dst.len() / width;
-    // Per level: the norm, and the weights along each axis.
+    // Per level: the norm, the weights along each axis, and per coarse row the columns
+    // between its first and last non-zero pixel (ghosts cover a part of a frame: a coarse
+    // frame is mostly black, and its black parts add nothing).
     let setup: Vec<_> = levels
         .iter()
         .map(|(coarse, grid)| {
+            let spans: Vec<(usize, usize)> = coarse
+                .pixels
+                .par_chunks(grid.width)
+                .map(|row| {
+                    let lit = |p: &[f32; 3]| p.iter().any(|&v| v != 0.0);
+                    match row.iter().position(lit) {
+                        Some(first) => (first, row.iter().rposition(lit).unwrap_or(first) + 1),
+                        None => (0, 0),
+                    }
+                })
+                .collect();
             (
                 *coarse,
                 grid.width,
                 1.0 / (grid.factor * grid.factor) as f32,
                 axis_weights(width, grid.width, grid.factor, grid.offset[0]),
                 axis_weights(height, grid.height, grid.factor, grid.offset[1]),
+                spans,
             )
         })
         .collect();
@@ -133,18 +147,32 @@ pub fn add_upsampled_levels_into(
     dst.par_chunks_mut(width).enumerate().for_each_init(
         || vec![[0.0_f32; 3]; widest],
         |blend, (y, row)| {
-            for (coarse, cw, norm, xs, ys) in &setup {
+            for (coarse, cw, norm, xs, ys, spans) in &setup {
                 let (j0, j1, ty) = ys[y];
+                // The coarse columns lit in either row, and the full-resolution pixels whose
+                // interpolation reads one of them (the weights are monotone in x).
+                let (a, b) = (spans[j0], spans[j1]);
+                let (c0, c1) = match (a.0 < a.1, b.0 < b.1) {
+                    (false, false) => continue,
+                    (true, false) => a,
+                    (false, true) => b,
+                    (true, true) => (a.0.min(b.0), a.1.max(b.1)),
+                };
+                let x0 = xs.partition_point(|w| w.1 < c0);
+                let x1 = xs.partition_point(|w| w.0 < c1);
                 let (r0, r1) = (
                     &coarse.pixels[j0 * cw..(j0 + 1) * cw],
                     &coarse.pixels[j1 * cw..(j1 + 1) * cw],
                 );
-                for ((b, a0), a1) in blend.iter_mut().zip(r0).zip(r1) {
+                // Blend the two rows over the lit columns and one either side (their
+                // neighbours are read at the span's ends).
+                let (b0, b1) = (c0.saturating_sub(1), (c1 + 1).min(*cw));
+                for ((bl, a0), a1) in blend[b0..b1].iter_mut().zip(&r0[b0..b1]).zip(&r1[b0..b1]) {
                     for c in 0..3 {
-                        b[c] = norm * (a0[c] + ty * (a1[c] - a0[c]));
+                        bl[c] = norm * (a0[c] + ty * (a1[c] - a0[c]));
                     }
                 }
-                for (p, &(i0, i1, tx)) in row.iter_mut().zip(xs) {
+                for (p, &(i0, i1, tx)) in row[x0..x1].iter_mut().zip(&xs[x0..x1]) {
                     let (a, b) = (blend[i0], blend[i1]);
                     for c in 0..3 {
                         p[c] += a[c] + tx * (b[c] - a[c]);
@@ -255,5 +283,54 @@ mod tests {
         let before = fused.clone();
         add_upsampled_levels_into(&mut fused.pixels, w, &[]);
         assert_eq!(fused, before);
+    }
+
+    /// Every pixel of every level interpolated, black or not: what the span-skipping pass
+    /// must reproduce.
+    fn dense(dst: &mut [[f32; 3]], width: usize, coarse: &HdrImage, grid: &CoarseGrid) {
+        let height = dst.len() / width;
+        let norm = 1.0 / (grid.factor * grid.factor) as f32;
+        let xs = axis_weights(width, grid.width, grid.factor, grid.offset[0]);
+        let ys = axis_weights(height, grid.height, grid.factor, grid.offset[1]);
+        for (y, row) in dst.chunks_mut(width).enumerate() {
+            let (j0, j1, ty) = ys[y];
+            for (p, &(i0, i1, tx)) in row.iter_mut().zip(&xs) {
+                let at = |j: usize, i: usize| coarse.pixels[j * grid.width + i];
+                for (c, v) in p.iter_mut().enumerate() {
+                    let a = at(j0, i0)[c] + ty * (at(j1, i0)[c] - at(j0, i0)[c]);
+                    let b = at(j0, i1)[c] + ty * (at(j1, i1)[c] - at(j0, i1)[c]);
+                    *v += norm * (a + tx * (b - a));
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn black_parts_of_sparse_levels_are_skipped_without_changing_the_sum() {
+        let (w, h) = (53, 31);
+        let mut want = HdrImage::new(w, h);
+        let mut got = HdrImage::new(w, h);
+        let mut levels = Vec::new();
+        for (f, lit) in [
+            (2, [(3, 4), (3, 5), (9, 0)]),
+            (4, [(0, 0), (13, 7), (6, 3)]),
+        ] {
+            let grid = CoarseGrid::for_frame(w, h, f);
+            let mut img = HdrImage::new(grid.width, grid.height);
+            for (i, j) in lit {
+                let (i, j) = (i.min(grid.width - 1), j.min(grid.height - 1));
+                img.pixels[j * grid.width + i] = [1.0 + i as f32, 2.0, j as f32];
+            }
+            dense(&mut want.pixels, w, &img, &grid);
+            levels.push((img, grid));
+        }
+        let refs: Vec<(&HdrImage, &CoarseGrid)> = levels.iter().map(|(i, g)| (i, g)).collect();
+        add_upsampled_levels_into(&mut got.pixels, w, &refs);
+        for (a, b) in want.pixels.iter().zip(&got.pixels) {
+            for c in 0..3 {
+                assert!((a[c] - b[c]).abs() <= 1e-6, "{a:?} {b:?}");
+            }
+        }
+        assert!(got.sum()[0] > 0.0);
     }
 }
