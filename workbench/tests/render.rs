@@ -206,6 +206,47 @@ fn bench_times_each_preset_and_reports_what_it_drew() {
     assert!(rows[1]["ghosts_drawn"].as_u64() >= rows[0]["ghosts_drawn"].as_u64());
 }
 
+/// With a precomputed table the plan looks the bounds up: the same ghosts are drawn, and a
+/// table is refused for more than one lens.
+#[test]
+fn bench_plans_from_a_precomputed_table() {
+    let table = temp_dir("bench-table").join("heliar.json");
+    precompute_heliar_to_12_degrees(&table);
+    let t = table.to_str().unwrap();
+    let base = [
+        "bench",
+        "heliar-tronnier",
+        "--size",
+        "96x54",
+        "--runs",
+        "1",
+        "--quality",
+        "default",
+        "--json",
+    ];
+    let traced = json(&base);
+    let looked_up = json(&[&base[..], &["--precomputed", t]].concat());
+    assert_eq!(traced[0]["precomputed"], false);
+    assert_eq!(looked_up[0]["precomputed"], true);
+    assert_eq!(looked_up[0]["ghosts_total"], 28);
+    let (a, b) = (
+        traced[0]["ghosts_drawn"].as_i64().unwrap(),
+        looked_up[0]["ghosts_drawn"].as_i64().unwrap(),
+    );
+    assert!((a - b).abs() <= 2, "traced {a}, looked up {b}");
+    let out = flarebench(&[
+        "bench",
+        "heliar-tronnier",
+        "double-gauss-50mm",
+        "--precomputed",
+        t,
+        "--runs",
+        "1",
+    ]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("exactly one lens"));
+}
+
 #[test]
 fn a_light_placed_by_its_image_position_images_there() {
     let out = temp_dir("render").join("at.exr");

@@ -2,7 +2,9 @@
 //! against the reference printed next to each time.
 //!
 //! For each lens and preset the scene is planned (bounds traced for the light) and rendered
-//! `--runs` times; the table gives the median of each stage. With `--error`, the reference
+//! `--runs` times; the table gives the median of each stage. With `--precomputed` (one lens)
+//! the plan looks the bounds up in a table instead (`render --precomputed`), which is what a
+//! renderer drawing many frames of one lens would do. With `--error`, the reference
 //! (`ghost_raytrace::reference`) is rendered once per lens at `--error-size` (default: the
 //! bench size) and each preset's image at that size is compared with it.
 
@@ -19,6 +21,7 @@ use serde::Serialize;
 
 use super::render::{frame_for, parse_downscale, parse_size};
 use crate::lens_library;
+use crate::precomputed::load_precomputed;
 use crate::table::Table;
 
 #[derive(Debug, Args)]
@@ -51,6 +54,11 @@ pub struct BenchArgs {
     /// Frame size for the error measurement (default: --size).
     #[arg(long, value_parser = parse_size)]
     pub error_size: Option<(usize, usize)>,
+    /// Ghost bounds precomputed over a range of angles (as `render --precomputed`: our JSON
+    /// table or OpenLensFlare's XML), for the plan to look up instead of tracing them. Only
+    /// with one lens.
+    #[arg(long, value_name = "FILE")]
+    pub precomputed: Option<std::path::PathBuf>,
     /// Print the results as JSON.
     #[arg(long)]
     pub json: bool,
@@ -63,6 +71,8 @@ pub struct BenchRow {
     pub quality: Quality,
     /// Reflections per ghost path planned for (2, or 4 for two and four).
     pub reflections: ReflectionOrder,
+    /// True when the plan looked the bounds up in `--precomputed`'s table.
+    pub precomputed: bool,
     pub width: usize,
     pub height: usize,
     pub ghosts_drawn: usize,
@@ -93,10 +103,18 @@ fn median(mut v: Vec<f64>) -> f64 {
 pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
     anyhow::ensure!(args.runs >= 1, "--runs must be at least 1");
     let lights = std::slice::from_ref(&args.light);
+    anyhow::ensure!(
+        args.precomputed.is_none() || args.lenses.len() == 1,
+        "--precomputed needs exactly one lens (a table is made for one lens)"
+    );
     let aperture = Aperture::Circular;
     let mut rows = Vec::new();
     for name in &args.lenses {
         let sys = lens_library::load(name, quiet || args.json)?.system;
+        let table = match &args.precomputed {
+            Some(p) => Some(load_precomputed(p, &sys, quiet || args.json)?),
+            None => None,
+        };
         let frame = frame_for(&sys, args.size);
         let error_frame = frame_for(&sys, args.error_size.unwrap_or(args.size));
         let reference = if args.error {
@@ -120,7 +138,7 @@ pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
             let opts = PlanOptions {
                 max_downscale: args.max_downscale,
                 reflections: args.reflections,
-                ..PlanOptions::for_quality(q, None)
+                ..PlanOptions::for_quality(q, table.as_ref())
             };
             let (mut plan_ms, mut render_ms, mut frame_ms) = (vec![], vec![], vec![]);
             let mut last = None;
@@ -151,6 +169,7 @@ pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
                 lens: sys.name.clone(),
                 quality: q,
                 reflections: args.reflections,
+                precomputed: table.is_some(),
                 width: frame.width,
                 height: frame.height,
                 ghosts_drawn: lp.ghosts.len(),
@@ -199,13 +218,17 @@ pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
     }
     print!("{}", t.render());
     println!(
-        "light {},{}{}; medians of {} runs on {} threads; errors against the reference{}",
+        "light {},{}{}{}; medians of {} runs on {} threads; errors against the reference{}",
         args.light.theta_deg,
         args.light.phi_deg,
         if args.reflections == ReflectionOrder::Four {
             "; two- and four-reflection ghosts"
         } else {
             ""
+        },
+        match &args.precomputed {
+            Some(p) => format!("; bounds looked up in {}", p.display()),
+            None => String::new(),
         },
         args.runs,
         rayon::current_num_threads(),
