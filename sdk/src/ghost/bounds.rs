@@ -227,22 +227,38 @@ pub fn precise_from(
             &[WARM_GRID]
         };
         for &n in grids {
-            trace_grid(seq, theta, r, n, stop, scratch);
-            let Some(found) = passing_box(scratch) else {
-                continue 'plans;
-            };
-            let (cx, cy) = cell_size(scratch);
-            // A warm start must contain the ghost with room to spare.
-            if !full
-                && (found.x0 - r.x0 < cx
-                    || r.x1 - found.x1 < cx
-                    || found.y0 - r.y0 < cy
-                    || r.y1 - found.y1 < cy)
-            {
-                continue 'plans;
+            let mut widened = 0;
+            loop {
+                trace_grid(seq, theta, r, n, stop, scratch);
+                let Some(found) = passing_box(scratch) else {
+                    continue 'plans;
+                };
+                let (cx, cy) = cell_size(scratch);
+                // Sides where a passing vertex lies on the traced rectangle's edge: the ghost
+                // may go on beyond it.
+                let open = [
+                    found.x0 - r.x0 < cx,
+                    found.y0 - r.y0 < cy,
+                    r.x1 - found.x1 < cx,
+                    r.y1 - found.y1 < cy,
+                ];
+                if !full {
+                    // A warm start must contain the ghost with room to spare.
+                    if open.iter().any(|&o| o) {
+                        continue 'plans;
+                    }
+                } else if let Some(wider) = widen(&r, &open, &search).filter(|_| widened < 8) {
+                    // A coarse pass that caught only a thin slice of a ghost (its tip, say)
+                    // leaves it cut by the rectangle: trace again over a wider one.
+                    r = wider;
+                    widened += 1;
+                    continue;
+                }
+                // One cell of margin: the true edge lies between a passing and a failing
+                // vertex.
+                r = found.expand(cx, cy);
+                break;
             }
-            // One cell of margin: the true edge lies between a passing and a failing vertex.
-            r = found.expand(cx, cy);
         }
         rect = Some(r);
         break;
@@ -265,6 +281,36 @@ pub fn precise_from(
         mean_intensity,
         energy_share: if direct > 0.0 { flux / direct } else { 0.0 },
     })
+}
+
+/// `r` widened by its own width (height) on each side flagged in `open` (left, top, right,
+/// bottom) that lies inside `search`, clamped to `search`; `None` when no flagged side can
+/// move.
+fn widen(r: &Rect, open: &[bool; 4], search: &Rect) -> Option<Rect> {
+    let (w, h) = (r.width(), r.height());
+    let wider = Rect {
+        x0: if open[0] {
+            (r.x0 - w).max(search.x0)
+        } else {
+            r.x0
+        },
+        y0: if open[1] {
+            (r.y0 - h).max(search.y0)
+        } else {
+            r.y0
+        },
+        x1: if open[2] {
+            (r.x1 + w).min(search.x1)
+        } else {
+            r.x1
+        },
+        y1: if open[3] {
+            (r.y1 + h).min(search.y1)
+        } else {
+            r.y1
+        },
+    };
+    (wider != *r).then_some(wider)
 }
 
 /// The entrance-plane positions of the passing vertices' bounding box.
