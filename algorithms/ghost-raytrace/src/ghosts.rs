@@ -126,10 +126,10 @@ pub fn render_into(
 const BATCH_TRIANGLES: usize = 1 << 18;
 
 /// Adds the ghosts `group` (`(factor, light, ghost)`) into `pixels`, a row-major buffer of
-/// `ctx.frame`'s size (`width` pixels wide), appending each ghost's statistics to `stats`. Each ghost's bands are traced and turned into
-/// triangles in parallel, in batches of about [`BATCH_TRIANGLES`]; each batch is rasterized in
-/// one pass (tiles in parallel), in plan order, so the image does not depend on the number
-/// of threads.
+/// `ctx.frame`'s size (`width` pixels wide), appending each ghost's statistics to `stats`.
+/// Each ghost's bands are traced and turned into triangles in parallel, in batches of about
+/// [`BATCH_TRIANGLES`]; each batch is rasterized in one pass (tiles in parallel), in plan
+/// order, so the image does not depend on the number of threads.
 fn render_group(
     ctx: &GhostContext<'_>,
     plans: &[LightPlan],
