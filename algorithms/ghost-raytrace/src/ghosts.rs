@@ -5,9 +5,9 @@
 //! drawn into a coarse copy of the frame (full resolution for factor 1) and added to the
 //! output by bilinear upsampling, all coarse frames in one pass
 //! (`flarebench_sdk::image::add_upsampled_levels_into`); full-resolution ghosts are drawn
-//! straight into the output. Within a group,
-//! the ghosts are traced and meshed in parallel, then all their triangles are rasterized in
-//! one pass, its tiles spread over the cores.
+//! straight into the output. Within a group, each ghost's bands are traced and meshed in
+//! parallel, and each batch of meshes is rasterized in one pass, its tiles spread over the
+//! cores.
 //!
 //! [`GhostJob::downscale`]: crate::plan::GhostJob::downscale
 

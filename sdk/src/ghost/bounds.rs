@@ -247,7 +247,9 @@ pub fn precise_from(
                     if open.iter().any(|&o| o) {
                         continue 'plans;
                     }
-                } else if let Some(wider) = widen(&r, &open, &search).filter(|_| widened < 8) {
+                } else if let Some(wider) =
+                    widen(&r, &open, &search).filter(|_| widened < MAX_WIDENINGS)
+                {
                     // A coarse pass that caught only a thin slice of a ghost (its tip, say)
                     // leaves it cut by the rectangle: trace again over a wider one.
                     r = wider;
@@ -282,6 +284,10 @@ pub fn precise_from(
         energy_share: if direct > 0.0 { flux / direct } else { 0.0 },
     })
 }
+
+/// Times a full search's rectangle may be widened and traced again: each at least doubles
+/// a side, so a few reach the search square from any rectangle a coarse pass leaves.
+const MAX_WIDENINGS: usize = 8;
 
 /// `r` widened by its own width (height) on each side flagged in `open` (left, top, right,
 /// bottom) that lies inside `search`, clamped to `search`; `None` when no flagged side can

@@ -247,7 +247,7 @@ mod tests {
     }
 
     #[test]
-    fn levels_in_one_pass_match_level_by_level() {
+    fn levels_in_one_pass_match_each_level_interpolated_alone() {
         let (w, h) = (37, 23);
         let mut seq = HdrImage::new(w, h);
         for (k, p) in seq.pixels.iter_mut().enumerate() {
@@ -267,7 +267,7 @@ mod tests {
             })
             .collect();
         for (img, grid) in &levels {
-            add_upsampled_into(&mut seq.pixels, w, img, grid);
+            dense(&mut seq.pixels, w, img, grid);
         }
         let refs: Vec<(&HdrImage, &CoarseGrid)> = levels.iter().map(|(i, g)| (i, g)).collect();
         add_upsampled_levels_into(&mut fused.pixels, w, &refs);
