@@ -118,6 +118,74 @@ pub fn rasterize_into<const N: usize, F>(
 ) where
     F: Fn(&[f32; N]) -> [f32; 3] + Sync,
 {
+    rasterize_shaded_into(
+        pixels,
+        width,
+        positions,
+        attrs,
+        triangles,
+        coverage,
+        &FnShader(shade),
+    );
+}
+
+/// What a pixel adds, as a function of its interpolated attributes — with, for point-sampled
+/// rows, a way to say in advance where along a row the shade is zero (those pixels are
+/// skipped) and where it takes a cheaper form ([`Shader::shade_core`]).
+pub trait Shader<const N: usize>: Sync {
+    /// The value added at a pixel (times its covered area) with attributes `a`.
+    fn shade(&self, a: &[f32; N]) -> [f32; 3];
+
+    /// For a point-sampled row of `n` pixels whose attributes are `a + k · step` at pixel
+    /// `k` (exactly; the rasterizer's f32 values are within a few ulps of that), the pixels
+    /// where [`Shader::shade`] may be non-zero (`lit`; outside it it must be exactly zero) and,
+    /// within them, those where it equals [`Shader::shade_core`] (`core`). The default is the
+    /// whole row, no core.
+    fn split_row(&self, a: &[f32; N], step: &[f32; N], n: usize) -> RowSplit {
+        let _ = (a, step);
+        RowSplit {
+            lit: 0..n,
+            core: 0..0,
+        }
+    }
+
+    /// [`Shader::shade`] where [`Shader::split_row`] put a pixel in the core.
+    fn shade_core(&self, a: &[f32; N]) -> [f32; 3] {
+        self.shade(a)
+    }
+}
+
+/// How a point-sampled row of pixels divides ([`Shader::split_row`]): indices from the row's
+/// first pixel. A `core` outside `lit` is taken as empty.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct RowSplit {
+    pub lit: std::ops::Range<usize>,
+    pub core: std::ops::Range<usize>,
+}
+
+/// A closure as a [`Shader`] (no row split).
+struct FnShader<F>(F);
+
+impl<const N: usize, F> Shader<N> for FnShader<F>
+where
+    F: Fn(&[f32; N]) -> [f32; 3] + Sync,
+{
+    #[inline]
+    fn shade(&self, a: &[f32; N]) -> [f32; 3] {
+        (self.0)(a)
+    }
+}
+
+/// [`rasterize_into`] with a [`Shader`]: its row split is used on point-sampled rows.
+pub fn rasterize_shaded_into<const N: usize, S: Shader<N>>(
+    pixels: &mut [[f32; 3]],
+    width: usize,
+    positions: &[[f32; 2]],
+    attrs: &[[f32; N]],
+    triangles: &[[u32; 3]],
+    coverage: Coverage,
+    shader: &S,
+) {
     let height = pixels.len().checked_div(width).unwrap_or(0);
     if width == 0 || height == 0 || triangles.is_empty() {
         return;
@@ -175,9 +243,9 @@ pub fn rasterize_into<const N: usize, F>(
                 [view.x0 as f64, view.y0 as f64],
             );
             if setup.area >= min_area {
-                sample_in_tile(&mut view, p, &setup, &shade);
+                sample_in_tile(&mut view, p, &setup, shader);
             } else {
-                rasterize_in_tile(&mut view, &setup, &shade, &mut scratch);
+                rasterize_in_tile(&mut view, &setup, shader, &mut scratch);
             }
         }
     });
@@ -409,14 +477,12 @@ impl Scratch {
 /// above it. Each edge is walked column by column and its exact integrals (y is linear along
 /// an edge) are added to those columns; with `y` measured from the row's top, the top edge
 /// contributes nothing. No polygon is cut per pixel.
-fn rasterize_in_tile<const N: usize, F>(
+fn rasterize_in_tile<const N: usize, S: Shader<N>>(
     view: &mut TileView<'_>,
     tri: &Setup<N>,
-    shade: &F,
+    shader: &S,
     s: &mut Scratch,
-) where
-    F: Fn(&[f32; N]) -> [f32; 3],
-{
+) {
     let (tw, th) = (view.width as f64, view.height as f64);
     let whole = Polygon::triangle(tri.v[0], tri.v[1], tri.v[2]);
     whole.clip_slab::<0>(0.0, tw, &mut s.cols, &mut s.tmp);
@@ -488,7 +554,7 @@ fn rasterize_in_tile<const N: usize, F>(
                 i as f64 + (m[1] / m[0]).clamp(0.0, 1.0),
                 y0 + (m[2] / m[0]).clamp(0.0, 1.0),
             ];
-            let value = shade(&tri.interpolate(centroid));
+            let value = shader.shade(&tri.interpolate(centroid));
             let area = area as f32;
             let px = &mut row[i];
             px[0] += area * value[0];
@@ -502,7 +568,7 @@ fn rasterize_in_tile<const N: usize, F>(
             let mut a = tri.interpolate([full0 as f64 + 0.5, y0 + 0.5]);
             let step = tri.x_step();
             for px in &mut row[full0..full1] {
-                let value = shade(&a);
+                let value = shader.shade(&a);
                 px[0] += value[0];
                 px[1] += value[1];
                 px[2] += value[2];
@@ -522,14 +588,12 @@ fn rasterize_in_tile<const N: usize, F>(
 /// computed from the edge's endpoints in a fixed order (by y, then x) and in absolute pixel
 /// coordinates — the same bits in every triangle and tile that share the edge, so the
 /// half-open rule leaves no pixel centre out and counts none twice.
-fn sample_in_tile<const N: usize, F>(
+fn sample_in_tile<const N: usize, S: Shader<N>>(
     view: &mut TileView<'_>,
     p: [[f32; 2]; 3],
     tri: &Setup<N>,
-    shade: &F,
-) where
-    F: Fn(&[f32; N]) -> [f32; 3],
-{
+    shader: &S,
+) {
     let mut v = p.map(|q| [f64::from(q[0]), f64::from(q[1])]);
     v.sort_unstable_by(|a, b| a[1].total_cmp(&b[1]).then(a[0].total_cmp(&b[0])));
     let [top, mid, bottom] = v;
@@ -569,19 +633,46 @@ fn sample_in_tile<const N: usize, F>(
         if i0 >= i1 {
             continue;
         }
-        let (dx, dy) = (
-            (i0 as f64 + 0.5 - v0[0]) as f32,
-            (j as f64 + 0.5 - v0[1]) as f32,
-        );
-        let mut a: [f32; N] = std::array::from_fn(|k| tri.a0[k] + dx * step[k] + dy * step_y[k]);
-        for px in &mut view.rows[j][i0..i1] {
-            let value = shade(&a);
-            px[0] += value[0];
-            px[1] += value[1];
-            px[2] += value[2];
-            for (v, d) in a.iter_mut().zip(&step) {
-                *v += d;
-            }
+        let dy = (j as f64 + 0.5 - v0[1]) as f32;
+        // Attributes at pixel `i` of the row, from the attribute plane.
+        let at = |i: usize| -> [f32; N] {
+            let dx = (i as f64 + 0.5 - v0[0]) as f32;
+            std::array::from_fn(|k| tri.a0[k] + dx * step[k] + dy * step_y[k])
+        };
+        let a = at(i0);
+        let n = i1 - i0;
+        let split = shader.split_row(&a, &step, n);
+        let (l0, l1) = (split.lit.start.min(n), split.lit.end.min(n));
+        if l0 >= l1 {
+            continue;
+        }
+        let (mut c0, mut c1) = (split.core.start.max(l0), split.core.end.min(l1));
+        if c0 >= c1 {
+            (c0, c1) = (l1, l1);
+        }
+        let row = &mut view.rows[j][i0..i1];
+        let start = |k: usize| if k == 0 { a } else { at(i0 + k) };
+        sample_run(&mut row[l0..c0], start(l0), &step, |a| shader.shade(a));
+        sample_run(&mut row[c0..c1], start(c0), &step, |a| shader.shade_core(a));
+        sample_run(&mut row[c1..l1], start(c1), &step, |a| shader.shade(a));
+    }
+}
+
+/// Adds `shade` of `a`, `a + step`, `a + 2 step`, … to the pixels of `run`.
+#[inline(always)]
+fn sample_run<const N: usize>(
+    run: &mut [[f32; 3]],
+    mut a: [f32; N],
+    step: &[f32; N],
+    shade: impl Fn(&[f32; N]) -> [f32; 3],
+) {
+    for px in run {
+        let value = shade(&a);
+        px[0] += value[0];
+        px[1] += value[1];
+        px[2] += value[2];
+        for (v, d) in a.iter_mut().zip(step) {
+            *v += d;
         }
     }
 }

@@ -400,3 +400,48 @@ fn sampled_coverage_keeps_small_triangles_exact_and_samples_large_ones() {
         }
     }
 }
+
+/// A shader's row split on sampled rows: pixels outside `lit` are skipped, those in `core`
+/// take `shade_core`, the rest `shade` — each at the attributes of its own centre.
+#[test]
+fn a_shader_s_row_split_skips_and_cores_pixels() {
+    struct Split;
+    impl Shader<1> for Split {
+        fn shade(&self, a: &[f32; 1]) -> [f32; 3] {
+            [a[0], 1.0, 0.0]
+        }
+        fn split_row(&self, a: &[f32; 1], step: &[f32; 1], n: usize) -> RowSplit {
+            // The attribute is x: lit from x = 2 on, core for 4 ≤ x < 6.
+            assert_eq!(step[0], 1.0);
+            let from = |x: f32| (x - (a[0] - 0.5)).max(0.0) as usize;
+            RowSplit {
+                lit: from(2.0)..n,
+                core: from(4.0)..from(6.0),
+            }
+        }
+        fn shade_core(&self, a: &[f32; 1]) -> [f32; 3] {
+            [a[0], 2.0, 0.0]
+        }
+    }
+    let (w, h) = (10, 4);
+    let pts = [[0.0, 0.0], [10.0, 0.0], [10.0, 4.0], [0.0, 4.0]];
+    let attrs: Vec<[f32; 1]> = pts.iter().map(|p| [p[0]]).collect();
+    let mut img = HdrImage::new(w, h);
+    let sampled = Coverage::Sampled { min_area: 1.0 };
+    let tris = [[0, 1, 2], [0, 2, 3]];
+    rasterize_shaded_into(&mut img.pixels, w, &pts, &attrs, &tris, sampled, &Split);
+    for y in 0..h {
+        for x in 0..w {
+            let got = img.get(x, y).unwrap();
+            let want = match x {
+                0 | 1 => [0.0; 3],
+                4 | 5 => [x as f32 + 0.5, 2.0, 0.0],
+                _ => [x as f32 + 0.5, 1.0, 0.0],
+            };
+            assert!(
+                (0..3).all(|c| (got[c] - want[c]).abs() < 1e-5),
+                "({x},{y}) {got:?} vs {want:?}"
+            );
+        }
+    }
+}
