@@ -407,17 +407,58 @@ pub fn plan(
             dropped.extend(bounded_out);
             Ok(LightPlan {
                 light: light.clone(),
-                // Each band's interface tables, built in parallel.
-                bands: bins
-                    .par_iter()
-                    .map(|b| Band::new(system, b.centre_nm, [0.0; 3]))
-                    .collect(),
+                bands: band_tables(system, &bins, all_bands),
                 sampled: bands,
                 ghosts,
                 dropped,
                 reflections,
                 not_in_table,
             })
+        })
+        .collect()
+}
+
+/// Wavelength step (nm) of the interface tables a plan builds exactly: a band between two
+/// of them takes their interpolation (`InterfaceTableSet::between`: linear, with the entries
+/// near a critical angle and stacks of layers evaluated exactly), so a frame builds at most
+/// 42 sets of tables over 380–780 nm however many bands its ghosts take (the Nikon zoom's
+/// ghosts take up to 31 bands each, about 500 distinct wavelengths in all). Measured at 10°,
+/// 30° (1920 × 1080 Heliar, 960 × 540 Nikon zoom, default quality): the error against the
+/// reference moved from 1.844% to 1.839% (Heliar) and 2.009% to 2.011% (Nikon), the energy
+/// by +0.04 and +0.05 points.
+pub const TABLE_STEP_NM: f64 = 10.0;
+
+/// Each bin's band (its centre wavelength and interface tables; colour zero): with `exact`
+/// (the reference), or when there are no more bins than tables every [`TABLE_STEP_NM`] over
+/// their range, tables built at every centre; otherwise tables between those every
+/// [`TABLE_STEP_NM`] (`InterfaceTableSet::between`). Built in parallel.
+fn band_tables(system: &LensSystem, bins: &[Bin], exact: bool) -> Vec<Band> {
+    let (lo, hi) = bins.iter().fold((f64::INFINITY, 0.0_f64), |(lo, hi), b| {
+        (lo.min(b.centre_nm), hi.max(b.centre_nm))
+    });
+    let first = (lo / TABLE_STEP_NM).floor();
+    let count = ((hi / TABLE_STEP_NM).ceil() - first).max(0.0) as usize + 1;
+    // Fewer bands than tables to interpolate between: each built exactly, for less.
+    if exact || bins.len() <= count {
+        return bins
+            .par_iter()
+            .map(|b| Band::new(system, b.centre_nm, [0.0; 3]))
+            .collect();
+    }
+    let nodes: Vec<InterfaceTableSet> = (0..count)
+        .into_par_iter()
+        .map(|k| InterfaceTableSet::for_system(system, (first + k as f64) * TABLE_STEP_NM))
+        .collect();
+    bins.par_iter()
+        .map(|b| {
+            let x = b.centre_nm / TABLE_STEP_NM - first;
+            let i = (x.max(0.0) as usize).min(count.saturating_sub(2));
+            let next = (i + 1).min(count - 1);
+            Band {
+                lambda_nm: b.centre_nm,
+                rgb: [0.0; 3],
+                tables: InterfaceTableSet::between(system, b.centre_nm, &nodes[i], &nodes[next]),
+            }
         })
         .collect()
 }

@@ -524,36 +524,26 @@ impl<A: Fn(f32, f32, f32) -> f32 + Sync> Shader<8> for EdgeShader<A> {
     fn split_row(&self, a: &EdgeAttrs, step: &EdgeAttrs, n: usize) -> RowSplit {
         let f = f64::from(a[6]);
         let (outer, inner) = (1.0 + 0.5 * f + SPLIT_MARGIN, 1.0 - 0.5 * f - SPLIT_MARGIN);
-        let (m0, dm) = (f64::from(a[5]), f64::from(step[5]));
-        let mut lit = below_linear(m0, dm, outer, n);
-        let mut core = below_linear(m0, dm, inner, n);
-        if a[7] > 0.5 {
+        let last = n.saturating_sub(1) as f64;
+        let (mut lit, mut core) =
+            linear_split(f64::from(a[5]), f64::from(step[5]), [outer, inner], n);
+        if a[7] > 0.5 && lit.start < lit.end {
             if self.circle {
                 let (u, v) = (f64::from(a[3]), f64::from(a[4]));
                 let (du, dv) = (f64::from(step[3]), f64::from(step[4]));
-                // r² = |(u, v) + k (du, dv)|², least at kc; constant along a row that does not
-                // move across the stop (then r² < t holds for all pixels or none).
-                let a2 = du * du + dv * dv;
-                let (lit_a, core_a) = if a2 > 0.0 {
-                    let ia = 1.0 / a2;
-                    let kc = -(u * du + v * dv) * ia;
-                    let (pu, pv) = (u + kc * du, v + kc * dv);
-                    let p = [pu * pu + pv * pv, kc, ia];
-                    (
-                        below_parabola(p, outer * outer, n),
-                        below_parabola(p, inner * inner, n),
-                    )
-                } else {
-                    let r2 = u * u + v * v;
-                    let all = |t: f64| if r2 < t { 0..n } else { 0..0 };
-                    (all(outer * outer), all(inner * inner))
-                };
-                lit = intersect(lit, lit_a);
-                core = if inner > 0.0 {
-                    intersect(core, core_a)
-                } else {
-                    0..0
-                };
+                let (ue, ve) = (u + last * du, v + last * dv);
+                let (r0, r1) = (u * u + v * v, ue * ue + ve * ve);
+                // r² = |(u, v) + k (du, dv)|² is convex along the row: within the inner
+                // circle at both ends, it is everywhere (the usual case on the clip's edge).
+                if r0.max(r1) >= inner * inner || inner <= 0.0 {
+                    let (lit_a, core_a) = parabola_split(u, v, du, dv, [outer, inner], n);
+                    lit = intersect(lit, lit_a);
+                    core = if inner > 0.0 {
+                        intersect(core, core_a)
+                    } else {
+                        0..0
+                    };
+                }
             } else {
                 core = 0..0;
             }
@@ -567,27 +557,64 @@ impl<A: Fn(f32, f32, f32) -> f32 + Sync> Shader<8> for EdgeShader<A> {
     }
 }
 
-/// The pixels `k` in `[0, n)` with `m0 + k·dm < t`.
-fn below_linear(m0: f64, dm: f64, t: f64, n: usize) -> std::ops::Range<usize> {
+/// The pixels `k` in `[0, n)` with `m0 + k·dm < outer`, and those with `m0 + k·dm < inner`.
+fn linear_split(
+    m0: f64,
+    dm: f64,
+    [outer, inner]: [f64; 2],
+    n: usize,
+) -> (std::ops::Range<usize>, std::ops::Range<usize>) {
+    let below = |t: f64| if m0 < t { 0..n } else { 0..0 };
+    if dm == 0.0 || dm.is_nan() {
+        return (below(outer), below(inner));
+    }
+    let m1 = m0 + n.saturating_sub(1) as f64 * dm;
+    if m0.max(m1) < inner {
+        return (0..n, 0..n);
+    }
+    if m0.min(m1) >= outer {
+        return (0..0, 0..0);
+    }
+    let id = 1.0 / dm;
+    let (xl, xc) = ((outer - m0) * id, (inner - m0) * id);
     if dm > 0.0 {
-        0..ceil_index((t - m0) / dm, n)
-    } else if dm < 0.0 {
-        after_index((t - m0) / dm, n)..n
-    } else if m0 < t {
-        0..n
+        (0..ceil_index(xl, n), 0..ceil_index(xc, n))
     } else {
-        0..0
+        (after_index(xl, n)..n, after_index(xc, n)..n)
     }
 }
 
-/// The pixels `k` in `[0, n)` where a convex quadratic, `q0 + a·(k − kc)²` (`q0` its least
-/// value, `ia` = 1/`a` > 0), is below `t`.
-fn below_parabola([q0, kc, ia]: [f64; 3], t: f64, n: usize) -> std::ops::Range<usize> {
-    if t.is_nan() || q0.is_nan() || t <= q0 {
-        return 0..0;
+/// The pixels `k` in `[0, n)` with `|(u, v) + k (du, dv)| < outer`, and those with it
+/// `< inner`.
+fn parabola_split(
+    u: f64,
+    v: f64,
+    du: f64,
+    dv: f64,
+    [outer, inner]: [f64; 2],
+    n: usize,
+) -> (std::ops::Range<usize>, std::ops::Range<usize>) {
+    let a2 = du * du + dv * dv;
+    if a2 > 0.0 {
+        // Least at kc, where it is q0: below t for |k − kc| < √((t − q0)/a2).
+        let ia = 1.0 / a2;
+        let kc = -(u * du + v * dv) * ia;
+        let (pu, pv) = (u + kc * du, v + kc * dv);
+        let q0 = pu * pu + pv * pv;
+        let below = |t: f64| {
+            if t.is_nan() || q0.is_nan() || t <= q0 {
+                return 0..0;
+            }
+            let h = ((t - q0) * ia).sqrt();
+            after_index(kc - h, n)..ceil_index(kc + h, n)
+        };
+        (below(outer * outer), below(inner * inner))
+    } else {
+        // The row does not move across the stop.
+        let r2 = u * u + v * v;
+        let below = |t: f64| if r2 < t { 0..n } else { 0..0 };
+        (below(outer * outer), below(inner * inner))
     }
-    let h = ((t - q0) * ia).sqrt();
-    after_index(kc - h, n)..ceil_index(kc + h, n)
 }
 
 /// `⌈x⌉` clamped to `[0, n]` (0 for NaN), without a libm call.
