@@ -101,13 +101,52 @@ impl Coating {
                     index: *index,
                     thickness_nm: design_wavelength_nm / (4.0 * index),
                 };
-                stack_reflectance(n_from, n_to, &[layer], cos_i, lambda_nm, true)
+                single_layer_reflectance(n_from, n_to, layer, cos_i, lambda_nm).unwrap_or_else(
+                    || stack_reflectance(n_from, n_to, &[layer], cos_i, lambda_nm, true),
+                )
             }
             Coating::Stack(layers) => {
                 stack_reflectance(n_from, n_to, layers, cos_i, lambda_nm, forward)
             }
         }
     }
+}
+
+/// [`stack_reflectance`] of one layer in closed form (Airy's summation of the layer's
+/// multiple reflections, per polarisation
+/// `R = (r₁² + r₂² + 2 r₁ r₂ cos 2δ) / (1 + r₁² r₂² + 2 r₁ r₂ cos 2δ)` with real interface
+/// coefficients), when the light propagates in the layer and beyond it; `None` when it is
+/// evanescent in either (then the complex recursion is needed). Tables of a lens's
+/// interfaces evaluate this at every entry, so it avoids complex arithmetic.
+fn single_layer_reflectance(
+    n_from: f64,
+    n_to: f64,
+    layer: CoatingLayer,
+    cos_i: f64,
+    lambda_nm: f64,
+) -> Option<f64> {
+    let c0 = cos_i.abs().min(1.0);
+    let s2 = n_from * n_from * (1.0 - c0 * c0);
+    let n1 = layer.index;
+    let (k1, k2) = (1.0 - s2 / (n1 * n1), 1.0 - s2 / (n_to * n_to));
+    if !(k1 > 0.0 && k2 > 0.0) {
+        return None;
+    }
+    let (c1, c2) = (k1.sqrt(), k2.sqrt());
+    let cos_2delta = (4.0 * PI * n1 * layer.thickness_nm * c1 / lambda_nm).cos();
+    let airy = |r1: f64, r2: f64| {
+        let x = 2.0 * r1 * r2 * cos_2delta;
+        (r1 * r1 + r2 * r2 + x) / (1.0 + r1 * r1 * r2 * r2 + x)
+    };
+    let rs = airy(
+        (n_from * c0 - n1 * c1) / (n_from * c0 + n1 * c1),
+        (n1 * c1 - n_to * c2) / (n1 * c1 + n_to * c2),
+    );
+    let rp = airy(
+        (n1 * c0 - n_from * c1) / (n1 * c0 + n_from * c1),
+        (n_to * c1 - n1 * c2) / (n_to * c1 + n1 * c2),
+    );
+    Some(0.5 * (rs + rp))
 }
 
 /// Reflectance (unpolarised) of a layer stack between `n_from` (incidence side) and `n_to`.
@@ -252,6 +291,39 @@ mod tests {
         let f = stack.reflectance(1.0, 1.6, 1.0, 480.0, true);
         let r = stack.reflectance(1.0, 1.6, 1.0, 480.0, false);
         assert!((f - r).abs() > 1e-4, "{f} vs {r}");
+    }
+
+    /// The closed form of one layer against the general recursion, over angles (up to and past
+    /// the critical ones), wavelengths, layer and substrate indices, both directions.
+    #[test]
+    fn one_layer_in_closed_form_matches_the_stack_recursion() {
+        let mut checked = 0;
+        for (n0, n2) in [(1.0, 1.52), (1.0, 1.9), (1.62, 1.0), (1.5, 1.75), (1.8, 1.5)] {
+            for (n1, lambda0) in [(1.38, 550.0), (1.38, 620.0), (2.1, 500.0)] {
+                let layer = CoatingLayer {
+                    index: n1,
+                    thickness_nm: lambda0 / (4.0 * n1),
+                };
+                for lambda in [380.0, 455.5, 550.0, 700.0, 780.0] {
+                    for k in 0..=200 {
+                        let c = k as f64 / 200.0;
+                        let stack = stack_reflectance(n0, n2, &[layer], c, lambda, true);
+                        if let Some(r) = single_layer_reflectance(n0, n2, layer, c, lambda) {
+                            assert!((r - stack).abs() < 1e-13, "{n0} {n1} {n2} {c} {lambda}");
+                            checked += 1;
+                        }
+                        let both = Coating::SingleLayer {
+                            design_wavelength_nm: lambda0,
+                            index: n1,
+                        }
+                        .reflectance(n0, n2, c, lambda, true);
+                        assert!((both - stack).abs() < 1e-13);
+                    }
+                }
+            }
+        }
+        // Most of the cases propagate (the closed form is used), some do not.
+        assert!(checked > 10_000 && checked < 15 * 5 * 201, "{checked}");
     }
 
     #[test]
