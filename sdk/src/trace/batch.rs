@@ -289,7 +289,12 @@ fn trace_packet_dispatch<T: Real>(
     tables: &[InterfaceTable<T>],
     p: &mut Packet<T>,
 ) {
-    for s in steps {
+    for (i, s) in steps.iter().enumerate() {
+        // Every few steps: once every ray of the packet has stopped, the rest are skipped
+        // (a stopped ray's position and direction are unspecified anyway).
+        if i % 4 == 3 && p.fate.iter().fold(TERMINATED, |a, &f| a & f) != 0 {
+            break;
+        }
         match s.table.map(|t| &tables[t as usize]) {
             Some(t) => dispatch_step!(s, step_packet_weighted, s, t, p),
             None => dispatch_step!(s, step_packet, s, p),
