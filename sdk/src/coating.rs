@@ -298,7 +298,13 @@ mod tests {
     #[test]
     fn one_layer_in_closed_form_matches_the_stack_recursion() {
         let mut checked = 0;
-        for (n0, n2) in [(1.0, 1.52), (1.0, 1.9), (1.62, 1.0), (1.5, 1.75), (1.8, 1.5)] {
+        for (n0, n2) in [
+            (1.0, 1.52),
+            (1.0, 1.9),
+            (1.62, 1.0),
+            (1.5, 1.75),
+            (1.8, 1.5),
+        ] {
             for (n1, lambda0) in [(1.38, 550.0), (1.38, 620.0), (2.1, 500.0)] {
                 let layer = CoatingLayer {
                     index: n1,

@@ -597,10 +597,21 @@ fn sample_in_tile<const N: usize, S: Shader<N>>(
     let mut v = p.map(|q| [f64::from(q[0]), f64::from(q[1])]);
     v.sort_unstable_by(|a, b| a[1].total_cmp(&b[1]).then(a[0].total_cmp(&b[0])));
     let [top, mid, bottom] = v;
-    // First row (column) whose centre is at or after y (x): ⌈y − ½⌉, clamped to the tile.
+    // First row (column) of the tile whose centre is at or after y (x): ⌈y − ½ − origin⌉,
+    // clamped to the tile (0 for NaN). Both subtractions are exact where it matters (y ≥ ½,
+    // the origin a whole number), so this is a function of `u` alone: the same for every
+    // triangle sharing the edge.
     let (x0, y0) = (view.x0 as f64, view.y0 as f64);
     let first = |u: f64, lo: f64, len: usize| -> usize {
-        (ceil(u - 0.5) - lo).clamp(0.0, len as f64) as usize
+        let v = u - 0.5 - lo;
+        if v.is_nan() || v <= 0.0 {
+            0
+        } else if v >= len as f64 {
+            len
+        } else {
+            let t = v as usize;
+            t + usize::from((t as f64) < v)
+        }
     };
     let j0 = first(top[1], y0, view.height);
     let j1 = first(bottom[1], y0, view.height);
@@ -754,14 +765,6 @@ fn full_run(strip: &Polygon, y0: f64, i0: usize, i1: usize) -> (usize, usize) {
 #[inline]
 fn floor_index(x: f64) -> usize {
     x as usize
-}
-
-/// `⌈x⌉` for `|x| < 2⁶³` (NaN gives 0): `f64::ceil` is a libm call on baseline x86-64, and
-/// this is in the sampled rows' set-up.
-#[inline]
-fn ceil(x: f64) -> f64 {
-    let t = x as i64 as f64;
-    if t < x { t + 1.0 } else { t }
 }
 
 /// `⌈x⌉` as an index, for `x ≥ 0` (0 for negative or NaN).

@@ -65,6 +65,42 @@ fn axis_weights(
         .collect()
 }
 
+/// The full-resolution pixels of a row grouped by the two coarse pixels they interpolate
+/// between (consecutive, since the weights are monotone), and each pixel's weight.
+struct Runs {
+    spans: Vec<Run>,
+    tx: Vec<f32>,
+}
+
+/// Pixels `[x0, x1)` interpolate between coarse pixels `i0` and `i1`.
+struct Run {
+    x0: usize,
+    x1: usize,
+    i0: usize,
+    i1: usize,
+}
+
+impl Runs {
+    fn new(xs: &[(usize, usize, f32)]) -> Runs {
+        let mut spans: Vec<Run> = Vec::new();
+        for (x, &(i0, i1, _)) in xs.iter().enumerate() {
+            match spans.last_mut() {
+                Some(r) if (r.i0, r.i1) == (i0, i1) => r.x1 = x + 1,
+                _ => spans.push(Run {
+                    x0: x,
+                    x1: x + 1,
+                    i0,
+                    i1,
+                }),
+            }
+        }
+        Runs {
+            spans,
+            tx: xs.iter().map(|w| w.2).collect(),
+        }
+    }
+}
+
 /// Adds `coarse` (laid out by `grid`) to `dst` at full resolution: bilinear interpolation of
 /// the coarse density, divided by `factor²` so that energy is kept.
 ///
@@ -133,11 +169,13 @@ pub fn add_upsampled_levels_into(
                     }
                 })
                 .collect();
+            let xs = axis_weights(width, grid.width, grid.factor, grid.offset[0]);
             (
                 *coarse,
                 grid.width,
                 1.0 / (grid.factor * grid.factor) as f32,
-                axis_weights(width, grid.width, grid.factor, grid.offset[0]),
+                Runs::new(&xs),
+                xs,
                 axis_weights(height, grid.height, grid.factor, grid.offset[1]),
                 spans,
             )
@@ -147,7 +185,7 @@ pub fn add_upsampled_levels_into(
     dst.par_chunks_mut(width).enumerate().for_each_init(
         || vec![[0.0_f32; 3]; widest],
         |blend, (y, row)| {
-            for (coarse, cw, norm, xs, ys, spans) in &setup {
+            for (coarse, cw, norm, runs, xs, ys, spans) in &setup {
                 let (j0, j1, ty) = ys[y];
                 // The coarse columns lit in either row, and the full-resolution pixels whose
                 // interpolation reads one of them (the weights are monotone in x).
@@ -172,10 +210,18 @@ pub fn add_upsampled_levels_into(
                         bl[c] = norm * (a0[c] + ty * (a1[c] - a0[c]));
                     }
                 }
-                for (p, &(i0, i1, tx)) in row[x0..x1].iter_mut().zip(&xs[x0..x1]) {
-                    let (a, b) = (blend[i0], blend[i1]);
-                    for c in 0..3 {
-                        p[c] += a[c] + tx * (b[c] - a[c]);
+                // Run by run: the pixels between two coarse centres read the same two.
+                let first = runs.spans.partition_point(|r| r.x1 <= x0);
+                for r in &runs.spans[first..] {
+                    if r.x0 >= x1 {
+                        break;
+                    }
+                    let (a, b) = (blend[r.i0], blend[r.i1]);
+                    let (xa, xb) = (r.x0.max(x0), r.x1.min(x1));
+                    for (p, &tx) in row[xa..xb].iter_mut().zip(&runs.tx[xa..xb]) {
+                        for c in 0..3 {
+                            p[c] += a[c] + tx * (b[c] - a[c]);
+                        }
                     }
                 }
             }
