@@ -186,6 +186,11 @@ pub struct PlanOptions<'a> {
     /// table without some four-reflection ghost that survives the energy bound is not an
     /// error: that ghost's bounds are traced for the light, as without a table.
     pub reflections: ReflectionOrder,
+    /// The lens's interface tables every [`TABLE_STEP_NM`], built once per lens
+    /// ([`LensTables::new`]; a plugin does it when the lens is prepared): the plan then
+    /// interpolates between them instead of building them. Tables of another lens are
+    /// ignored. The plan is the same with or without them.
+    pub lens_tables: Option<&'a LensTables>,
 }
 
 impl<'a> PlanOptions<'a> {
@@ -200,6 +205,7 @@ impl<'a> PlanOptions<'a> {
             all_bands: false,
             max_downscale: MAX_DOWNSCALE,
             reflections: ReflectionOrder::Two,
+            lens_tables: None,
         }
     }
 }
@@ -220,6 +226,7 @@ pub fn plan(
         all_bands,
         max_downscale,
         reflections,
+        lens_tables,
     } = *opts;
     let paths = enumerate_ghosts_of_order(system, reflections);
     let tables = InterfaceTableSet::for_system(system, BOUNDS_LAMBDA_NM);
@@ -407,7 +414,7 @@ pub fn plan(
             dropped.extend(bounded_out);
             Ok(LightPlan {
                 light: light.clone(),
-                bands: band_tables(system, &bins, all_bands),
+                bands: band_tables(system, &bins, all_bands, lens_tables),
                 sampled: bands,
                 ghosts,
                 dropped,
@@ -428,11 +435,58 @@ pub fn plan(
 /// by +0.04 and +0.05 points.
 pub const TABLE_STEP_NM: f64 = 10.0;
 
+/// A lens's interface tables every [`TABLE_STEP_NM`] over 380–780 nm: what a plan
+/// interpolates its bands' tables between ([`PlanOptions::lens_tables`]).
+#[derive(Debug)]
+pub struct LensTables {
+    system: LensSystem,
+    nodes: Vec<InterfaceTableSet>,
+}
+
+impl LensTables {
+    /// First and last wavelengths tabulated (nm): every band centre lies between them.
+    const RANGE_NM: [f64; 2] = [380.0, 780.0];
+
+    /// The tables of `system` (built in parallel).
+    pub fn new(system: &LensSystem) -> Self {
+        let [lo, hi] = Self::RANGE_NM;
+        let count = ((hi - lo) / TABLE_STEP_NM).round() as usize + 1;
+        LensTables {
+            system: system.clone(),
+            nodes: (0..count)
+                .into_par_iter()
+                .map(|k| InterfaceTableSet::for_system(system, lo + k as f64 * TABLE_STEP_NM))
+                .collect(),
+        }
+    }
+
+    /// True when these are `system`'s tables.
+    pub fn is_for(&self, system: &LensSystem) -> bool {
+        self.system == *system
+    }
+
+    /// The tables every [`TABLE_STEP_NM`] from `first` nm, `count` of them, if they are
+    /// held.
+    fn nodes(&self, first: f64, count: usize) -> Option<&[InterfaceTableSet]> {
+        let k = (first - Self::RANGE_NM[0]) / TABLE_STEP_NM;
+        if !(k >= 0.0 && k.fract() == 0.0) {
+            return None;
+        }
+        self.nodes.get(k as usize..k as usize + count)
+    }
+}
+
 /// Each bin's band (its centre wavelength and interface tables; colour zero): with `exact`
 /// (the reference), or when there are no more bins than tables every [`TABLE_STEP_NM`] over
 /// their range, tables built at every centre; otherwise tables between those every
-/// [`TABLE_STEP_NM`] (`InterfaceTableSet::between`). Built in parallel.
-fn band_tables(system: &LensSystem, bins: &[Bin], exact: bool) -> Vec<Band> {
+/// [`TABLE_STEP_NM`] (`InterfaceTableSet::between`), taken from `lens` when it holds them
+/// for this system. Built in parallel.
+fn band_tables(
+    system: &LensSystem,
+    bins: &[Bin],
+    exact: bool,
+    lens: Option<&LensTables>,
+) -> Vec<Band> {
     let (lo, hi) = bins.iter().fold((f64::INFINITY, 0.0_f64), |(lo, hi), b| {
         (lo.min(b.centre_nm), hi.max(b.centre_nm))
     });
@@ -445,10 +499,20 @@ fn band_tables(system: &LensSystem, bins: &[Bin], exact: bool) -> Vec<Band> {
             .map(|b| Band::new(system, b.centre_nm, [0.0; 3]))
             .collect();
     }
-    let nodes: Vec<InterfaceTableSet> = (0..count)
-        .into_par_iter()
-        .map(|k| InterfaceTableSet::for_system(system, (first + k as f64) * TABLE_STEP_NM))
-        .collect();
+    let built: Vec<InterfaceTableSet>;
+    let nodes = match lens
+        .filter(|l| l.is_for(system))
+        .and_then(|l| l.nodes(first * TABLE_STEP_NM, count))
+    {
+        Some(nodes) => nodes,
+        None => {
+            built = (0..count)
+                .into_par_iter()
+                .map(|k| InterfaceTableSet::for_system(system, (first + k as f64) * TABLE_STEP_NM))
+                .collect();
+            &built
+        }
+    };
     bins.par_iter()
         .map(|b| {
             let x = b.centre_nm / TABLE_STEP_NM - first;
@@ -579,6 +643,61 @@ mod tests {
     fn square(px: f64) -> Rect {
         let h = 0.5 * px * 36.0 / 1920.0;
         Rect::square(0.0, 0.0, h)
+    }
+
+    /// Lens tables (built once per lens) give the same bands as tables built by the plan,
+    /// and another lens's are ignored.
+    #[test]
+    fn lens_tables_give_the_same_plan() {
+        let read = |stem: &str| {
+            let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join(format!("../../lenses/{stem}.xml"));
+            flarebench_sdk::io::read_lens(&p).unwrap().system
+        };
+        let (sys, other) = (read("nikon-zoom-short"), read("heliar-tronnier"));
+        let lights = [LightSpec::parse("10,30").unwrap()];
+        let f = Frame {
+            width: 480,
+            height: 270,
+            film_width_mm: sys.film_width_mm,
+            film_height_mm: sys.film_width_mm * 270.0 / 480.0,
+        };
+        let mine = LensTables::new(&sys);
+        let theirs = LensTables::new(&other);
+        assert!(mine.is_for(&sys) && !theirs.is_for(&sys));
+        let base = PlanOptions::for_quality(Quality::Default, None);
+        let plan_with = |lens_tables| {
+            plan(
+                &sys,
+                &lights,
+                &f,
+                &PlanOptions {
+                    lens_tables,
+                    ..base
+                },
+            )
+            .unwrap()
+            .remove(0)
+        };
+        let without = plan_with(None);
+        // Enough distinct bands that the plan interpolates between tables.
+        assert!(without.bands.len() > 42, "{} bands", without.bands.len());
+        for with in [plan_with(Some(&mine)), plan_with(Some(&theirs))] {
+            assert_eq!(with.bands.len(), without.bands.len());
+            for (a, b) in with.bands.iter().zip(&without.bands) {
+                assert_eq!(a.lambda_nm, b.lambda_nm);
+                for s in 0..sys.surfaces.len() {
+                    for forward in [true, false] {
+                        use flarebench_sdk::trace::Interaction::Reflect;
+                        let (x, y) = (
+                            a.tables.get(s, forward, Reflect),
+                            b.tables.get(s, forward, Reflect),
+                        );
+                        assert_eq!(x.map(|t| t.values), y.map(|t| t.values), "surface {s}");
+                    }
+                }
+            }
+        }
     }
 
     #[test]

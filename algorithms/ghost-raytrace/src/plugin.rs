@@ -10,7 +10,7 @@ use flarebench_sdk::abi::author::{
 };
 
 use crate::ghosts;
-use crate::plan::{self, PlanOptions};
+use crate::plan::{self, LensTables, PlanOptions};
 use crate::scene::{LightSpec, Quality};
 use flarebench_sdk::ghost::ReflectionOrder;
 
@@ -21,6 +21,8 @@ const REFLECTIONS: &[&str] = &["2", "4"];
 #[derive(Debug, Default)]
 pub struct GhostRaytrace {
     lens: Option<LensSystem>,
+    /// The prepared lens's interface tables, for every frame's plan.
+    tables: Option<LensTables>,
 }
 
 /// The scene's lights as the renderer's [`LightSpec`]s.
@@ -100,6 +102,7 @@ impl FlarePlugin for GhostRaytrace {
 
     fn prepare(&mut self, lens: &LensSystem) -> Result<(), PluginError> {
         self.lens = Some(lens.clone());
+        self.tables = Some(LensTables::new(lens));
         Ok(())
     }
 
@@ -113,7 +116,10 @@ impl FlarePlugin for GhostRaytrace {
             .lens
             .as_ref()
             .ok_or_else(|| PluginError::new("no lens prepared"))?;
-        let opts = plan_options(params)?;
+        let opts = PlanOptions {
+            lens_tables: self.tables.as_ref(),
+            ..plan_options(params)?
+        };
         let plans = plan::plan(lens, &light_specs(scene), &scene.frame, &opts)?;
         // Straight into the host's buffer: no image of the frame's size, no copy.
         ghosts::render_into(

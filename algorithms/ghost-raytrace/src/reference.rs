@@ -144,6 +144,7 @@ pub fn reference_plans_of_order(
         all_bands: true,
         max_downscale: 1,
         reflections,
+        lens_tables: None,
     };
     let mut plans = plan::plan(system, lights, frame, &opts)?;
     let min_grid = (REFERENCE_MIN_GRID as f64 * density).round() as usize;

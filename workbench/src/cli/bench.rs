@@ -14,7 +14,7 @@ use clap::Args;
 use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::ghost::ReflectionOrder;
 use ghost_raytrace::ghosts;
-use ghost_raytrace::plan::{self, PlanOptions};
+use ghost_raytrace::plan::{self, LensTables, PlanOptions};
 use ghost_raytrace::reference::reference_image_of_order;
 use ghost_raytrace::scene::{LightSpec, Quality};
 use serde::Serialize;
@@ -79,6 +79,9 @@ pub struct BenchRow {
     pub ghosts_total: usize,
     /// Share of the ghosts' energy left out by the plan.
     pub dropped_energy_fraction: f64,
+    /// Building the lens's interface tables once, before the runs (milliseconds): what a
+    /// plugin does when the lens is prepared (`ghost_raytrace::plan::LensTables`).
+    pub prepare_ms: f64,
     /// Medians over the runs (milliseconds).
     pub plan_ms: f64,
     pub render_ms: f64,
@@ -134,10 +137,16 @@ pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
         } else {
             None
         };
+        // The lens's interface tables, built once per lens (as a plugin does when the lens
+        // is prepared), for every frame's plan.
+        let t = Instant::now();
+        let lens_tables = LensTables::new(&sys);
+        let prepare_ms = t.elapsed().as_secs_f64() * 1e3;
         for &q in &args.quality {
             let opts = PlanOptions {
                 max_downscale: args.max_downscale,
                 reflections: args.reflections,
+                lens_tables: Some(&lens_tables),
                 ..PlanOptions::for_quality(q, table.as_ref())
             };
             let (mut plan_ms, mut render_ms, mut frame_ms) = (vec![], vec![], vec![]);
@@ -175,6 +184,7 @@ pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
                 ghosts_drawn: lp.ghosts.len(),
                 ghosts_total: lp.ghosts.len() + lp.dropped.len(),
                 dropped_energy_fraction: if total > 0.0 { dropped / total } else { 0.0 },
+                prepare_ms,
                 plan_ms: median(plan_ms),
                 render_ms: median(render_ms),
                 frame_ms: median(frame_ms),
@@ -195,6 +205,7 @@ pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
         "size",
         "ghosts",
         "dropped",
+        "lens ms",
         "plan ms",
         "render ms",
         "frame ms",
@@ -209,6 +220,7 @@ pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
             format!("{}×{}", r.width, r.height),
             format!("{}/{}", r.ghosts_drawn, r.ghosts_total),
             format!("{:.2}%", 100.0 * r.dropped_energy_fraction),
+            format!("{:.1}", r.prepare_ms),
             format!("{:.1}", r.plan_ms),
             format!("{:.1}", r.render_ms),
             format!("{:.1}", r.frame_ms),
@@ -218,7 +230,7 @@ pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
     }
     print!("{}", t.render());
     println!(
-        "light {},{}{}{}; medians of {} runs on {} threads; errors against the reference{}",
+        "light {},{}{}{}; lens ms: the lens's interface tables, built once per lens before the runs; medians of {} runs on {} threads; errors against the reference{}",
         args.light.theta_deg,
         args.light.phi_deg,
         if args.reflections == ReflectionOrder::Four {
