@@ -609,8 +609,9 @@ fn sample_in_tile<const N: usize, S: Shader<N>>(
         } else if v >= len as f64 {
             len
         } else {
-            let t = v as usize;
-            t + usize::from((t as f64) < v)
+            // 0 < v < len ≤ TILE_SIZE: the narrow cast is exact (and cheaper than a usize).
+            let t = v as i32;
+            (t + i32::from(f64::from(t) < v)) as usize
         }
     };
     let j0 = first(top[1], y0, view.height);
