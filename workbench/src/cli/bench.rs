@@ -12,6 +12,7 @@ use std::time::Instant;
 
 use clap::Args;
 use flarebench_sdk::aperture::Aperture;
+use flarebench_sdk::image::HdrImage;
 use flarebench_sdk::ghost::ReflectionOrder;
 use ghost_raytrace::ghosts;
 use ghost_raytrace::plan::{self, LensTables, PlanOptions};
@@ -150,12 +151,23 @@ pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
                 ..PlanOptions::for_quality(q, table.as_ref())
             };
             let (mut plan_ms, mut render_ms, mut frame_ms) = (vec![], vec![], vec![]);
+            let mut img = HdrImage::new(frame.width, frame.height);
             let mut last = None;
             for _ in 0..args.runs {
                 let t0 = Instant::now();
                 let plans = plan::plan(&sys, lights, &frame, &opts)?;
                 let t1 = Instant::now();
-                let (img, _) = ghosts::render(&sys, &aperture, frame, &plans)?;
+                // Into one frame buffer kept from run to run and cleared in the timed part, as
+                // a live preview draws into its window's buffer.
+                img.pixels.fill([0.0; 3]);
+                ghosts::render_into(
+                    &sys,
+                    &aperture,
+                    frame,
+                    &plans,
+                    ghosts::RenderOptions::default(),
+                    &mut img.pixels,
+                )?;
                 let t2 = Instant::now();
                 anyhow::ensure!(!img.has_non_finite(), "non-finite pixels");
                 plan_ms.push((t1 - t0).as_secs_f64() * 1e3);
