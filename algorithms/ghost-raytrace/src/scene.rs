@@ -162,16 +162,18 @@ impl Quality {
 
     /// Coarse pixels a ghost's radius must span when it is drawn into a coarse frame
     /// (`plan::coarse_factor`): the edge blur this allows touches about 1/this of the ghost's
-    /// area. The default is the coarsest that keeps every measured frame within 2% relative
-    /// RMSE against the reference (2026-11-25, default preset otherwise): Heliar at 1920 ×
-    /// 1080, light 10°, 30° — 64: 2.89%, 80: 2.06%, 96: 1.96% (render 28 ms), 104: 1.86%,
-    /// 128: 1.84% (54 ms), 160: 1.37% (77 ms); Heliar at 960 × 540, 5°, 0° and 15°, 60° —
-    /// 96: 1.50% and 1.19%, 128: 1.45% and 1.01%; Nikon zoom at 960 × 540, 10°, 30° — 96:
-    /// 2.015%, 128: 2.011% (its 1080p render 0.79 s against 1.14 s).
+    /// area. The default is the coarsest that keeps every measured Heliar frame within 2%
+    /// relative RMSE against the reference, with traced bounds and with a precomputed table
+    /// (2026-11-25, default preset otherwise). Heliar at 1920 × 1080, light 10°, 30°, traced /
+    /// table: 64: 2.89% / —, 80: 2.06% / —, 96: 1.96% / 2.03% (render about 30 ms), 104: 1.86%
+    /// / 1.99% (about 40 ms), 112: 1.85% / 1.93%, 128: 1.84% / 1.92% (about 55 ms), 160: 1.37%
+    /// (77 ms); at 960 × 540, 5°, 0° and 15°, 60°, 104: 1.46% and 1.11% (128: 1.45%, 1.01%).
+    /// The Nikon zoom (960 × 540, 10°, 30°) is over 2% at either: 104: 2.014% / 2.164%, 128:
+    /// 2.011% / 2.161%, its 1080p render about 20% faster at 104.
     pub fn coarse_pixels_per_radius(self) -> f64 {
         match self {
             Quality::Fast => 32.0,
-            Quality::Default => 96.0,
+            Quality::Default => 104.0,
             Quality::High => 512.0,
         }
     }

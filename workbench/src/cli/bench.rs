@@ -12,8 +12,8 @@ use std::time::Instant;
 
 use clap::Args;
 use flarebench_sdk::aperture::Aperture;
-use flarebench_sdk::image::HdrImage;
 use flarebench_sdk::ghost::ReflectionOrder;
+use flarebench_sdk::image::HdrImage;
 use ghost_raytrace::ghosts;
 use ghost_raytrace::plan::{self, LensTables, PlanOptions};
 use ghost_raytrace::reference::reference_image_of_order;
