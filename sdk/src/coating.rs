@@ -138,15 +138,9 @@ fn single_layer_reflectance(
         let x = 2.0 * r1 * r2 * cos_2delta;
         (r1 * r1 + r2 * r2 + x) / (1.0 + r1 * r1 * r2 * r2 + x)
     };
-    let rs = airy(
-        (n_from * c0 - n1 * c1) / (n_from * c0 + n1 * c1),
-        (n1 * c1 - n_to * c2) / (n1 * c1 + n_to * c2),
-    );
-    let rp = airy(
-        (n1 * c0 - n_from * c1) / (n1 * c0 + n_from * c1),
-        (n_to * c1 - n1 * c2) / (n_to * c1 + n1 * c2),
-    );
-    Some(0.5 * (rs + rp))
+    let [s01, p01] = real_interface(n_from, c0, n1, c1);
+    let [s12, p12] = real_interface(n1, c1, n_to, c2);
+    Some(0.5 * (airy(s01, s12) + airy(p01, p12)))
 }
 
 /// Reflectance (unpolarised) of a layer stack between `n_from` (incidence side) and `n_to`.
@@ -215,6 +209,13 @@ pub fn stack_reflectance(
 
 /// Amplitude reflection coefficients `[s, p]` at an interface from (n1, cos θ1) into (n2, cos θ2).
 fn interface(n1: f64, c1: Complex64, n2: f64, c2: Complex64) -> [Complex64; 2] {
+    let rs = (n1 * c1 - n2 * c2) / (n1 * c1 + n2 * c2);
+    let rp = (n2 * c1 - n1 * c2) / (n2 * c1 + n1 * c2);
+    [rs, rp]
+}
+
+/// [`interface`] with real cosines (the light propagates on both sides).
+fn real_interface(n1: f64, c1: f64, n2: f64, c2: f64) -> [f64; 2] {
     let rs = (n1 * c1 - n2 * c2) / (n1 * c1 + n2 * c2);
     let rp = (n2 * c1 - n1 * c2) / (n2 * c1 + n1 * c2);
     [rs, rp]
@@ -294,7 +295,7 @@ mod tests {
     }
 
     /// The closed form of one layer against the general recursion, over angles (up to and past
-    /// the critical ones), wavelengths, layer and substrate indices, both directions.
+    /// the critical ones), wavelengths, layer and substrate indices.
     #[test]
     fn one_layer_in_closed_form_matches_the_stack_recursion() {
         let mut checked = 0;

@@ -565,17 +565,10 @@ fn rasterize_in_tile<const N: usize, S: Shader<N>>(
             // Pixels wholly inside: area 1 at the centre. The attributes are affine in x, so
             // they step by a constant from one centre to the next (the centres are inside the
             // triangle, where no clamping applies).
-            let mut a = tri.interpolate([full0 as f64 + 0.5, y0 + 0.5]);
-            let step = tri.x_step();
-            for px in &mut row[full0..full1] {
-                let value = shader.shade(&a);
-                px[0] += value[0];
-                px[1] += value[1];
-                px[2] += value[2];
-                for (v, d) in a.iter_mut().zip(&step) {
-                    *v += d;
-                }
-            }
+            let a = tri.interpolate([full0 as f64 + 0.5, y0 + 0.5]);
+            sample_run(&mut row[full0..full1], a, &tri.x_step(), |a| {
+                shader.shade(a)
+            });
         }
     }
 }

@@ -625,7 +625,8 @@ fn ceil_index(x: f64, n: usize) -> usize {
     if (t as f64) < x { t + 1 } else { t }
 }
 
-/// `⌊x⌋ + 1`, the first index above `x`, clamped to `[0, n]` (0 for NaN).
+/// `⌊x⌋ + 1`, the first index above `x`, clamped to `[0, n]` (`n` for NaN: with
+/// [`ceil_index`]'s 0, a NaN bound gives an empty range).
 #[inline]
 fn after_index(x: f64, n: usize) -> usize {
     if x < 0.0 {

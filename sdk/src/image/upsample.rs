@@ -169,13 +169,17 @@ pub fn add_upsampled_levels_into(
                     }
                 })
                 .collect();
-            let xs = axis_weights(width, grid.width, grid.factor, grid.offset[0]);
+            let runs = Runs::new(&axis_weights(
+                width,
+                grid.width,
+                grid.factor,
+                grid.offset[0],
+            ));
             (
                 *coarse,
                 grid.width,
                 1.0 / (grid.factor * grid.factor) as f32,
-                Runs::new(&xs),
-                xs,
+                runs,
                 axis_weights(height, grid.height, grid.factor, grid.offset[1]),
                 spans,
             )
@@ -185,7 +189,7 @@ pub fn add_upsampled_levels_into(
     dst.par_chunks_mut(width).enumerate().for_each_init(
         || vec![[0.0_f32; 3]; widest],
         |blend, (y, row)| {
-            for (coarse, cw, norm, runs, xs, ys, spans) in &setup {
+            for (coarse, cw, norm, runs, ys, spans) in &setup {
                 let (j0, j1, ty) = ys[y];
                 // The coarse columns lit in either row, and the full-resolution pixels whose
                 // interpolation reads one of them (the weights are monotone in x).
@@ -196,8 +200,6 @@ pub fn add_upsampled_levels_into(
                     (false, true) => b,
                     (true, true) => (a.0.min(b.0), a.1.max(b.1)),
                 };
-                let x0 = xs.partition_point(|w| w.1 < c0);
-                let x1 = xs.partition_point(|w| w.0 < c1);
                 let (r0, r1) = (
                     &coarse.pixels[j0 * cw..(j0 + 1) * cw],
                     &coarse.pixels[j1 * cw..(j1 + 1) * cw],
@@ -210,15 +212,15 @@ pub fn add_upsampled_levels_into(
                         bl[c] = norm * (a0[c] + ty * (a1[c] - a0[c]));
                     }
                 }
-                // Run by run: the pixels between two coarse centres read the same two.
-                let first = runs.spans.partition_point(|r| r.x1 <= x0);
+                // Run by run: the pixels between two coarse centres read the same two; the
+                // runs that read a lit column (the weights are monotone in x).
+                let first = runs.spans.partition_point(|r| r.i1 < c0);
                 for r in &runs.spans[first..] {
-                    if r.x0 >= x1 {
+                    if r.i0 >= c1 {
                         break;
                     }
                     let (a, b) = (blend[r.i0], blend[r.i1]);
-                    let (xa, xb) = (r.x0.max(x0), r.x1.min(x1));
-                    for (p, &tx) in row[xa..xb].iter_mut().zip(&runs.tx[xa..xb]) {
+                    for (p, &tx) in row[r.x0..r.x1].iter_mut().zip(&runs.tx[r.x0..r.x1]) {
                         for c in 0..3 {
                             p[c] += a[c] + tx * (b[c] - a[c]);
                         }
