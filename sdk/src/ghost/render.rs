@@ -16,7 +16,7 @@
 //! **Image orientation.** The output is the photograph: the sensor image turned by 180°, so a
 //! point at sensor (x, y) mm lands at pixel ((0.5 − x/W)·w, (0.5 + y/H)·h), pixel rows downward.
 
-use crate::aperture::Aperture;
+use crate::aperture::{Aperture, ApertureSampler};
 use crate::image::{CoarseGrid, HdrImage};
 use crate::raster::{Coverage, RowSplit, Shader, rasterize_into, rasterize_shaded_into};
 use crate::system::LensSystem;
@@ -302,125 +302,222 @@ pub fn mesh_ghost(
     mesh: &mut GhostMesh,
 ) -> GhostStats {
     let mut stats = GhostStats::default();
-    let (sphi, cphi) = light.phi.sin_cos();
-    let cos_t = light.theta.cos();
-    let frame = ctx.frame;
-    let px_area = frame.pixel_area_mm2();
-    let feather = feather_width(bounds, n, &frame);
     let aperture = ctx.aperture.sampler();
-    let convex = aperture.is_convex();
     for band in bands {
-        let Ok(seq) = Sequence::ghost_path(ctx.system, band.lambda_nm, &path) else {
+        if !trace_band(ctx, path, bounds, n, light, band, grid) {
             return stats;
-        };
-        // The aperture's shape clips at the stop (from the recorded crossing), so the grid's
-        // radius clip must not clip there a second time.
-        let seq = seq.with_tables_from(band.tables).aperture_by_mask();
-        if ctx.trace_f64 {
-            trace_grid_f64(&seq, light.theta, bounds.entrance, n, ctx.stop_radius, grid);
-        } else {
-            trace_grid(
-                &seq.cast::<f32>(),
-                light.theta,
-                bounds.entrance,
-                n,
-                ctx.stop_radius,
-                grid,
-            );
         }
-        let g = &*grid;
         stats.rays += n * n;
-        // Smallest sensor area a triangle may have: the Airy disc.
-        let airy = 1.22 * band.lambda_nm * 1e-6 * ctx.f_number;
-        let min_area = std::f64::consts::PI * airy * airy;
-        let half_cell = 0.5 * g.cell_area() * cos_t;
-        let rot = |k: usize| {
-            let [x, y] = g.sensor[k].map(f64::from);
-            [x * cphi - y * sphi, x * sphi + y * cphi]
-        };
-        // The stop crossing in the lens's frame, where the aperture's shape is fixed (the grid is
-        // traced with the light in the y–z plane; the lens frame is that turned by φ).
-        let (s32, c32) = (sphi as f32, cphi as f32);
-        let stop_uv = |k: usize| {
-            let [u, v] = g.stop_uv[k];
-            [u * c32 - v * s32, u * s32 + v * c32]
-        };
-        let rgb = band.rgb;
-        let lum = 0.2126 * rgb[0] as f64 + 0.7152 * rgb[1] as f64 + 0.0722 * rgb[2] as f64;
-        for j in 0..n - 1 {
-            for i in 0..n - 1 {
-                let k00 = j * n + i;
-                let quad = [k00, k00 + 1, k00 + n + 1, k00 + n];
-                for tri in [[quad[0], quad[1], quad[2]], [quad[0], quad[2], quad[3]]] {
-                    if !tri.iter().all(|&k| g.completed[k]) {
-                        continue;
-                    }
-                    // Fully clipped triangles add nothing.
-                    if tri.iter().all(|&k| g.max_rel[k] > 1.0 + feather) {
-                        continue;
-                    }
-                    let mut p = tri.map(rot);
-                    let area = 0.5
-                        * ((p[1][0] - p[0][0]) * (p[2][1] - p[0][1])
-                            - (p[2][0] - p[0][0]) * (p[1][1] - p[0][1]))
-                            .abs();
-                    if !area.is_finite() {
-                        continue;
-                    }
-                    let c = [
-                        (p[0][0] + p[1][0] + p[2][0]) / 3.0,
-                        (p[0][1] + p[1][1] + p[2][1]) / 3.0,
-                    ];
-                    let area = if area >= min_area {
-                        area
-                    } else if area > 0.0 {
-                        // Grow about the centroid to the diffraction limit.
-                        let s = (min_area / area).sqrt();
-                        for q in &mut p {
-                            *q = [c[0] + (q[0] - c[0]) * s, c[1] + (q[1] - c[1]) * s];
-                        }
-                        min_area
-                    } else {
-                        // Degenerate: a small triangle of area 2·airy² at the point.
-                        let r = airy;
-                        p = [[c[0] - r, c[1] - r], [c[0] + r, c[1] - r], [c[0], c[1] + r]];
-                        2.0 * r * r
-                    };
-                    let irr = (half_cell / area * light.irradiance * px_area) as f32;
-                    let pixels = p.map(|q| frame.to_pixel(q[0], q[1]));
-                    let colour = |k: usize| {
-                        let e = irr * g.weight[k];
-                        [rgb[0] * e, rgb[1] * e, rgb[2] * e]
-                    };
-                    // Inside the clip radius, and (for a convex opening) inside the aperture,
-                    // by half a feather at every corner — so everywhere inside.
-                    let radius_open = tri.iter().all(|&k| g.max_rel[k] <= 1.0 - 0.5 * feather);
-                    let aperture_open = convex
-                        && tri.iter().all(|&k| {
-                            let [u, v] = stop_uv(k);
-                            aperture.signed_distance(u, v) <= -0.5 * feather
-                        });
-                    if radius_open && aperture_open {
-                        mesh.open.push(pixels, tri.map(colour));
-                    } else {
-                        let flag = if aperture_open { 0.0 } else { 1.0 };
-                        mesh.edge.push(
-                            pixels,
-                            tri.map(|k| {
-                                let [r, gr, b] = colour(k);
-                                let [u, v] = stop_uv(k);
-                                [r, gr, b, u, v, g.max_rel[k], feather, flag]
-                            }),
-                        );
-                    }
-                    let w_mean = tri.iter().map(|&k| g.weight[k] as f64).sum::<f64>() / 3.0;
-                    stats.flux += half_cell * light.irradiance * w_mean * lum;
-                    stats.triangles += 1;
-                }
+        let emit = BandTriangles::new(ctx, bounds, n, light, band, &aperture, grid);
+        for tri in grid_triangles(n) {
+            if let Some(flux) = emit.push(tri, mesh) {
+                stats.flux += flux;
+                stats.triangles += 1;
             }
         }
     }
     stats
+}
+
+/// Traces `path` at `band` into `grid` (f32 or f64 as `ctx` says); false when the path has
+/// no sequence at this wavelength.
+pub(crate) fn trace_band(
+    ctx: &GhostContext<'_>,
+    path: GhostPath,
+    bounds: &GhostBounds,
+    n: usize,
+    light: &GhostLight,
+    band: &BandRef<'_>,
+    grid: &mut GridTrace,
+) -> bool {
+    let Ok(seq) = Sequence::ghost_path(ctx.system, band.lambda_nm, &path) else {
+        return false;
+    };
+    // The aperture's shape clips at the stop (from the recorded crossing), so the grid's
+    // radius clip must not clip there a second time.
+    let seq = seq.with_tables_from(band.tables).aperture_by_mask();
+    if ctx.trace_f64 {
+        trace_grid_f64(&seq, light.theta, bounds.entrance, n, ctx.stop_radius, grid);
+    } else {
+        trace_grid(
+            &seq.cast::<f32>(),
+            light.theta,
+            bounds.entrance,
+            n,
+            ctx.stop_radius,
+            grid,
+        );
+    }
+    true
+}
+
+/// The two triangles of every cell of an `n × n` grid (vertex indices, row-major).
+pub(crate) fn grid_triangles(n: usize) -> impl Iterator<Item = [usize; 3]> {
+    let cells = n.saturating_sub(1);
+    (0..cells * cells).flat_map(move |c| {
+        let k00 = (c / cells) * n + c % cells;
+        let quad = [k00, k00 + 1, k00 + n + 1, k00 + n];
+        [[quad[0], quad[1], quad[2]], [quad[0], quad[2], quad[3]]]
+    })
+}
+
+/// What one band's triangles need, fixed for a traced grid: turns a grid triangle into a
+/// mesh triangle ([`BandTriangles::push`]).
+pub(crate) struct BandTriangles<'a> {
+    pub grid: &'a GridTrace,
+    frame: Frame,
+    px_area: f64,
+    pub feather: f32,
+    /// Smallest sensor area a triangle may have (the Airy disc, mm²) and the Airy radius.
+    pub min_area: f64,
+    airy: f64,
+    /// Flux per unit weight through half a grid cell.
+    pub half_cell: f64,
+    irradiance: f64,
+    pub rgb: [f32; 3],
+    lum: f64,
+    sin_cos_phi: (f64, f64),
+    convex: bool,
+    aperture: &'a ApertureSampler<'a>,
+}
+
+impl<'a> BandTriangles<'a> {
+    pub(crate) fn new(
+        ctx: &GhostContext<'_>,
+        bounds: &GhostBounds,
+        n: usize,
+        light: &GhostLight,
+        band: &BandRef<'_>,
+        aperture: &'a ApertureSampler<'a>,
+        grid: &'a GridTrace,
+    ) -> Self {
+        let frame = ctx.frame;
+        let airy = 1.22 * band.lambda_nm * 1e-6 * ctx.f_number;
+        let rgb = band.rgb;
+        BandTriangles {
+            grid,
+            frame,
+            px_area: frame.pixel_area_mm2(),
+            feather: feather_width(bounds, n, &frame),
+            min_area: std::f64::consts::PI * airy * airy,
+            airy,
+            half_cell: 0.5 * grid.cell_area() * light.theta.cos(),
+            irradiance: light.irradiance,
+            rgb,
+            lum: 0.2126 * rgb[0] as f64 + 0.7152 * rgb[1] as f64 + 0.0722 * rgb[2] as f64,
+            sin_cos_phi: light.phi.sin_cos(),
+            convex: aperture.is_convex(),
+            aperture,
+        }
+    }
+
+    /// Where vertex `k` landed (sensor mm, the lens's frame: the grid is traced with the light
+    /// in the y–z plane; the lens frame is that turned by φ).
+    #[inline]
+    pub(crate) fn sensor(&self, k: usize) -> [f64; 2] {
+        let (sphi, cphi) = self.sin_cos_phi;
+        let [x, y] = self.grid.sensor[k].map(f64::from);
+        [x * cphi - y * sphi, x * sphi + y * cphi]
+    }
+
+    /// Vertex `k`'s stop crossing in the lens's frame, where the aperture's shape is fixed.
+    #[inline]
+    pub(crate) fn stop_uv(&self, k: usize) -> [f32; 2] {
+        let (sphi, cphi) = self.sin_cos_phi;
+        let (s32, c32) = (sphi as f32, cphi as f32);
+        let [u, v] = self.grid.stop_uv[k];
+        [u * c32 - v * s32, u * s32 + v * c32]
+    }
+
+    /// The flux a triangle with these corners' weights carries (luminance-weighted).
+    #[inline]
+    pub(crate) fn flux(&self, tri: [usize; 3]) -> f64 {
+        let w_mean = tri.iter().map(|&k| self.grid.weight[k] as f64).sum::<f64>() / 3.0;
+        self.half_cell * self.irradiance * w_mean * self.lum
+    }
+
+    /// Irradiance (image units per pixel²) of unit weight spread over `area` mm².
+    #[inline]
+    pub(crate) fn irradiance_over(&self, area: f64) -> f64 {
+        self.half_cell / area * self.irradiance * self.px_area
+    }
+
+    #[inline]
+    pub(crate) fn to_pixel(&self, q: [f64; 2]) -> [f32; 2] {
+        self.frame.to_pixel(q[0], q[1])
+    }
+
+    /// True when a convex aperture holds the stop point `uv` by half a feather.
+    #[inline]
+    pub(crate) fn inside_aperture(&self, uv: [f32; 2]) -> bool {
+        self.convex && self.aperture.signed_distance(uv[0], uv[1]) <= -0.5 * self.feather
+    }
+
+    /// Adds grid triangle `tri` to `mesh` (wholly open, or on an edge); returns its flux, or
+    /// `None` when it adds nothing (a ray stopped, wholly clipped, not finite).
+    pub(crate) fn push(&self, tri: [usize; 3], mesh: &mut GhostMesh) -> Option<f64> {
+        let g = self.grid;
+        let feather = self.feather;
+        if !tri.iter().all(|&k| g.completed[k]) {
+            return None;
+        }
+        // Fully clipped triangles add nothing.
+        if tri.iter().all(|&k| g.max_rel[k] > 1.0 + feather) {
+            return None;
+        }
+        let mut p = tri.map(|k| self.sensor(k));
+        let area = 0.5
+            * ((p[1][0] - p[0][0]) * (p[2][1] - p[0][1])
+                - (p[2][0] - p[0][0]) * (p[1][1] - p[0][1]))
+                .abs();
+        if !area.is_finite() {
+            return None;
+        }
+        let c = [
+            (p[0][0] + p[1][0] + p[2][0]) / 3.0,
+            (p[0][1] + p[1][1] + p[2][1]) / 3.0,
+        ];
+        let area = if area >= self.min_area {
+            area
+        } else if area > 0.0 {
+            // Grow about the centroid to the diffraction limit.
+            let s = (self.min_area / area).sqrt();
+            for q in &mut p {
+                *q = [c[0] + (q[0] - c[0]) * s, c[1] + (q[1] - c[1]) * s];
+            }
+            self.min_area
+        } else {
+            // Degenerate: a small triangle of area 2·airy² at the point.
+            let r = self.airy;
+            p = [[c[0] - r, c[1] - r], [c[0] + r, c[1] - r], [c[0], c[1] + r]];
+            2.0 * r * r
+        };
+        let irr = self.irradiance_over(area) as f32;
+        let pixels = p.map(|q| self.to_pixel(q));
+        let rgb = self.rgb;
+        let colour = |k: usize| {
+            let e = irr * g.weight[k];
+            [rgb[0] * e, rgb[1] * e, rgb[2] * e]
+        };
+        // Inside the clip radius, and (for a convex opening) inside the aperture, by half a
+        // feather at every corner — so everywhere inside.
+        let radius_open = tri.iter().all(|&k| g.max_rel[k] <= 1.0 - 0.5 * feather);
+        let aperture_open = tri.iter().all(|&k| self.inside_aperture(self.stop_uv(k)));
+        if radius_open && aperture_open {
+            mesh.open.push(pixels, tri.map(colour));
+        } else {
+            let flag = if aperture_open { 0.0 } else { 1.0 };
+            mesh.edge.push(
+                pixels,
+                tri.map(|k| {
+                    let [r, gr, b] = colour(k);
+                    let [u, v] = self.stop_uv(k);
+                    [r, gr, b, u, v, g.max_rel[k], feather, flag]
+                }),
+            );
+        }
+        Some(self.flux(tri))
+    }
 }
 
 /// Rasterizes `mesh` (made by [`mesh_ghost`] for a frame of `img`'s size) into `img`: the open
