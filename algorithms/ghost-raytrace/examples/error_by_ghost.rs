@@ -7,6 +7,9 @@
 //!     lenses/nikon-zoom-short.xml 10,30 480x270 default [BANDS]
 //! ```
 //!
+//! With `BAND_BY_BAND` set in the environment, the preset draws every band on its own
+//! (`RenderOptions::band_by_band`).
+//!
 //! Cross terms between ghosts are left out of the shares, so they need not sum to one; the
 //! total is the whole image's relative RMSE.
 
@@ -76,9 +79,18 @@ fn main() {
                     j.downscale
                 );
                 (
-                    ghosts::render(&sys, &aperture, frame, &alone(tp, k))
-                        .unwrap()
-                        .0,
+                    ghosts::render_with(
+                        &sys,
+                        &aperture,
+                        frame,
+                        &alone(tp, k),
+                        ghosts::RenderOptions {
+                            band_by_band: std::env::var_os("BAND_BY_BAND").is_some(),
+                            ..Default::default()
+                        },
+                    )
+                    .unwrap()
+                    .0,
                     what,
                 )
             }

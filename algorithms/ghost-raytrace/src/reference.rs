@@ -19,6 +19,12 @@ use crate::ghosts;
 use crate::plan::{self, LightPlan, PlanOptions};
 use crate::scene::{LightSpec, Quality};
 
+/// The reference draws every band on its own: no fringe model between it and the truth.
+const BAND_BY_BAND: ghosts::RenderOptions = ghosts::RenderOptions {
+    trace_f64: false,
+    band_by_band: true,
+};
+
 /// Wavelength bands of the reference renderer.
 pub const REFERENCE_BANDS: usize = 31;
 /// Smallest grid (vertices a side) of the reference renderer.
@@ -102,7 +108,7 @@ pub fn reference_image_of_order(
     reflections: ReflectionOrder,
 ) -> Result<HdrImage, GhostRenderError> {
     let plans = reference_plans_of_order(system, lights, &frame, 1.0, reflections)?;
-    Ok(ghosts::render(system, aperture, frame, &plans)?.0)
+    Ok(ghosts::render_with(system, aperture, frame, &plans, BAND_BY_BAND)?.0)
 }
 
 /// The reference with `density` times as many grid vertices a side (the convergence check).
@@ -114,7 +120,7 @@ pub fn reference_image_with_density(
     density: f64,
 ) -> Result<HdrImage, GhostRenderError> {
     let plans = reference_plans(system, lights, &frame, density)?;
-    Ok(ghosts::render(system, aperture, frame, &plans)?.0)
+    Ok(ghosts::render_with(system, aperture, frame, &plans, BAND_BY_BAND)?.0)
 }
 
 /// The reference's plan: no culling, every band traced, grids `density` × the reference's.

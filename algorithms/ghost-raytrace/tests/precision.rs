@@ -30,7 +30,10 @@ fn compare(lens: &str, light: &str) -> (f64, f64) {
             &Aperture::Circular,
             frame,
             &plans,
-            RenderOptions { trace_f64 },
+            RenderOptions {
+                trace_f64,
+                ..Default::default()
+            },
         )
         .unwrap()
         .0

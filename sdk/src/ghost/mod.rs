@@ -9,6 +9,8 @@
 //!   trace per three-reflection prefix) that culls them before their bounds are traced.
 //! - [`render`]: one ghost into an HDR image — triangles with energy-conserving intensities,
 //!   the aperture's shape at the stop, feathered clipping, the diffraction-limit caustic bound.
+//! - [`fringe`]: all of a dispersive ghost's bands as one mesh, its colour fringes shaded per
+//!   pixel.
 //! - [`table`]: bounds precomputed over a range of angles, stored and interpolated.
 //! - [`olf_table`]: OpenLensFlare's precomputed bounds (`<ghostList>` XML) as such a table,
 //!   checked against the lens, energies traced.
@@ -16,6 +18,7 @@
 pub mod bounds;
 pub mod enumerate;
 pub mod four_bound;
+pub mod fringe;
 pub mod grid;
 pub mod olf_table;
 pub mod render;

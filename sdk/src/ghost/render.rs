@@ -24,6 +24,7 @@ use crate::trace::{InterfaceTableSet, Sequence};
 
 use super::bounds::GhostBounds;
 use super::enumerate::GhostPath;
+use super::fringe::{FringeShader, FringeTable};
 use super::grid::{GridTrace, trace_grid, trace_grid_f64};
 
 /// The output image and the part of the sensor it shows.
@@ -161,6 +162,19 @@ impl<const N: usize> Mesh<N> {
         self.triangles.clear();
     }
 
+    /// Keeps the first `triangles` triangles.
+    pub fn truncate_to(&mut self, triangles: usize) {
+        if triangles < self.triangles.len() {
+            let vertices = self.triangles[triangles..]
+                .iter()
+                .flat_map(|t| t.iter())
+                .fold(usize::MAX, |m, &i| m.min(i as usize));
+            self.triangles.truncate(triangles);
+            self.positions.truncate(vertices);
+            self.attrs.truncate(vertices);
+        }
+    }
+
     /// Number of triangles.
     pub fn len(&self) -> usize {
         self.triangles.len()
@@ -206,6 +220,10 @@ pub type EdgeAttrs = [f32; 8];
 pub struct GhostMesh {
     pub open: Mesh<3>,
     pub edge: Mesh<8>,
+    /// Triangles standing for all of a ghost's bands at once, their colour fringes shaded per
+    /// pixel ([`super::fringe`]), and the ghosts' colour tables they index.
+    pub fringe: Mesh<12>,
+    pub fringe_tables: Vec<FringeTable>,
 }
 
 impl GhostMesh {
@@ -214,6 +232,8 @@ impl GhostMesh {
         GhostMesh {
             open: Mesh::with_capacity(open),
             edge: Mesh::with_capacity(edge),
+            fringe: Mesh::default(),
+            fringe_tables: Vec::new(),
         }
     }
 
@@ -221,20 +241,32 @@ impl GhostMesh {
     pub fn clear(&mut self) {
         self.open.clear();
         self.edge.clear();
+        self.fringe.clear();
+        self.fringe_tables.clear();
     }
 
     /// Makes room for the triangles of `meshes`.
     pub fn reserve<'a>(&mut self, meshes: impl Iterator<Item = &'a GhostMesh> + Clone) {
         let open: usize = meshes.clone().map(|m| m.open.len()).sum();
-        let edge: usize = meshes.map(|m| m.edge.len()).sum();
+        let edge: usize = meshes.clone().map(|m| m.edge.len()).sum();
+        let fringe: usize = meshes.map(|m| m.fringe.len()).sum();
         self.open.reserve(open);
         self.edge.reserve(edge);
+        self.fringe.reserve(fringe);
     }
 
     /// Adds every triangle of `other` after this mesh's own.
     pub fn append(&mut self, other: &GhostMesh) {
         self.open.append(&other.open);
         self.edge.append(&other.edge);
+        // The appended fringe triangles index the appended tables.
+        let first = self.fringe.attrs.len();
+        self.fringe.append(&other.fringe);
+        let base = self.fringe_tables.len() as f32;
+        for a in &mut self.fringe.attrs[first..] {
+            a[11] += base;
+        }
+        self.fringe_tables.extend_from_slice(&other.fringe_tables);
     }
 }
 
@@ -568,6 +600,21 @@ pub fn rasterize_ghost_mesh_into(
         };
         rasterize_edges(pixels, width, &mesh.edge, coverage, &shader);
     }
+    // Made for the circular stop only (`super::fringe`).
+    if !mesh.fringe.is_empty() {
+        let fringe = &mesh.fringe;
+        rasterize_shaded_into(
+            pixels,
+            width,
+            &fringe.positions,
+            &fringe.attrs,
+            &fringe.triangles,
+            coverage,
+            &FringeShader {
+                tables: &mesh.fringe_tables,
+            },
+        );
+    }
 }
 
 /// Rasterizes edge triangles with `shader`.
@@ -600,7 +647,7 @@ struct EdgeShader<A> {
 /// Margin (in relative radius at the stop) by which [`EdgeShader::split_row`] keeps pixels
 /// near a transition on the full shade: far more than the f32 rounding of the interpolated
 /// attributes along a tile's row (a few 1e-6).
-const SPLIT_MARGIN: f64 = 1e-4;
+pub(crate) const SPLIT_MARGIN: f64 = 1e-4;
 
 impl<A: Fn(f32, f32, f32) -> f32 + Sync> Shader<8> for EdgeShader<A> {
     #[inline]
@@ -655,7 +702,7 @@ impl<A: Fn(f32, f32, f32) -> f32 + Sync> Shader<8> for EdgeShader<A> {
 }
 
 /// The pixels `k` in `[0, n)` with `m0 + k·dm < outer`, and those with `m0 + k·dm < inner`.
-fn linear_split(
+pub(crate) fn linear_split(
     m0: f64,
     dm: f64,
     [outer, inner]: [f64; 2],

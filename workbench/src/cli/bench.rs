@@ -60,6 +60,10 @@ pub struct BenchArgs {
     /// with one lens.
     #[arg(long, value_name = "FILE")]
     pub precomputed: Option<std::path::PathBuf>,
+    /// Draw every wavelength band of a dispersive ghost on its own (as `render
+    /// --band-by-band`).
+    #[arg(long)]
+    pub band_by_band: bool,
     /// Print the results as JSON.
     #[arg(long)]
     pub json: bool,
@@ -153,6 +157,10 @@ pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
             let (mut plan_ms, mut render_ms, mut frame_ms) = (vec![], vec![], vec![]);
             let mut img = HdrImage::new(frame.width, frame.height);
             let mut last = None;
+            let options = ghosts::RenderOptions {
+                band_by_band: args.band_by_band,
+                ..Default::default()
+            };
             for _ in 0..args.runs {
                 let t0 = Instant::now();
                 let plans = plan::plan(&sys, lights, &frame, &opts)?;
@@ -160,14 +168,7 @@ pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
                 // Into one frame buffer kept from run to run and cleared in the timed part, as
                 // a live preview draws into its window's buffer.
                 img.pixels.fill([0.0; 3]);
-                ghosts::render_into(
-                    &sys,
-                    &aperture,
-                    frame,
-                    &plans,
-                    ghosts::RenderOptions::default(),
-                    &mut img.pixels,
-                )?;
+                ghosts::render_into(&sys, &aperture, frame, &plans, options, &mut img.pixels)?;
                 let t2 = Instant::now();
                 anyhow::ensure!(!img.has_non_finite(), "non-finite pixels");
                 plan_ms.push((t1 - t0).as_secs_f64() * 1e3);
@@ -182,7 +183,7 @@ pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
                 .as_ref()
                 .map(|r| -> anyhow::Result<_> {
                     let plans = plan::plan(&sys, lights, &error_frame, &opts)?;
-                    let img = ghosts::render(&sys, &aperture, error_frame, &plans)?.0;
+                    let img = ghosts::render_with(&sys, &aperture, error_frame, &plans, options)?.0;
                     Ok(img.compare(r)?)
                 })
                 .transpose()?;

@@ -60,6 +60,10 @@ pub struct RenderArgs {
     /// Trace the ghosts in f64 instead of f32 (slower; for checking precision).
     #[arg(long)]
     pub f64: bool,
+    /// Draw every wavelength band of a dispersive ghost on its own instead of groups of bands
+    /// as one mesh with per-pixel colour fringes (slower; for comparison).
+    #[arg(long)]
+    pub band_by_band: bool,
     #[command(flatten)]
     pub starburst: StarburstArgs,
     /// Add the flare onto this image (.exr linear, .png/.bmp sRGB) in linear light; the
@@ -344,6 +348,7 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
         &plans,
         ghosts::RenderOptions {
             trace_f64: args.f64,
+            band_by_band: args.band_by_band,
         },
     )?;
     timings.render_ms = ms(t);

@@ -1,0 +1,864 @@
+//! One mesh for all of a ghost's wavelength bands, its colour fringes shaded per pixel.
+//!
+//! Drawn band by band, a dispersive ghost costs its whole area once per band, although the
+//! bands' images differ only near the ghost's edges (where the clip radius and the aperture's
+//! outline fall at slightly different places for each wavelength) and by a small shift inside.
+//! [`mesh_ghost_fringed`] traces every band, then makes each grid triangle once, at the bands'
+//! mean position, carrying:
+//!
+//! - the sum over bands of its irradiance (each band's flux spread over the mean triangle's
+//!   area, so the triangle's flux is exactly the bands' total);
+//! - for the clip radius and the stop crossing, each band's value *at the mean triangle's
+//!   corners* — band `b`'s triangle is an affine map of the grid cell, so the value it would
+//!   have at any point of the sensor is its affine extension, exact within the triangle — fitted
+//!   by a line in a dispersion coordinate `τ ∈ [0, 1]` (`1/λ²`, normalised over the ghost's
+//!   bins, in which a glass's index, and so the ghost's geometry, is nearly linear).
+//!
+//! Per pixel the open bands form an interval of `τ` (the clip radius is linear in `τ`, the
+//! circular stop's `|(u, v)|²` a parabola), each end feathered by a linear ramp; the pixel
+//! takes its summed irradiance times, per channel, the share of the ghost's colour that falls
+//! in the interval — a lookup in the ghost's cumulative colour over `τ`
+//! ([`FringeTable`]). Inside the ghost this is one shade instead of one per band.
+//!
+//! A triangle is drawn band by band as before ([`super::render::mesh_ghost`]) wherever the
+//! model does not hold: a ray of some band stopped, the bands' triangles differ in orientation
+//! or by more than [`MAX_AREA_RATIO`] in area (a fold, a caustic), or a band's value departs
+//! from the line by more than a quarter of the feather.
+
+use crate::aperture::Aperture;
+use crate::raster::{RowSplit, Shader};
+
+use super::bounds::GhostBounds;
+use super::enumerate::GhostPath;
+use super::grid::GridTrace;
+use super::render::{
+    BandRef, BandTriangles, GhostContext, GhostLight, GhostMesh, GhostStats, SPLIT_MARGIN,
+    grid_triangles, linear_split, trace_band,
+};
+
+/// Attributes of a fringed triangle's corner: summed RGB irradiance, the clip radius at
+/// `τ = 0` and its change over `τ ∈ [0, 1]`, likewise the stop crossing's `u` and `v`, the
+/// feather width, 1 where the circular stop must be evaluated, and the index of the ghost's
+/// [`FringeTable`] in [`GhostMesh::fringe_tables`].
+pub type FringeAttrs = [f32; 12];
+
+/// Largest ratio between the areas of a grid triangle's images in two bands for which the
+/// triangle is drawn once: beyond it the cell folds or focuses (a caustic) and is drawn band
+/// by band.
+pub const MAX_AREA_RATIO: f64 = 1.1;
+
+/// Largest share of a ghost's grid triangles that may be drawn band by band among fringed
+/// ones; beyond it the whole ghost is. Measured on the Nikon zoom (docs/performance.md):
+/// mixing more raised its error from 1.88% to 4%.
+pub const MAX_FAILED_SHARE: f64 = 0.05;
+
+/// Width of the linear ramp that stands for the feather's smoothstep, in feathers:
+/// `√(12/20)`.
+const RAMP_WIDTH: f32 = 0.774_596_7;
+
+/// Steps over `τ` where the clip's and the stop's ramps overlap.
+const CORNER_STEPS: usize = 16;
+
+/// Nodes of a [`FringeTable`] over `τ ∈ [0, 1]`.
+const NODES: usize = 64;
+
+/// A ghost's colour as it accumulates over the dispersion coordinate `τ`: per channel, the
+/// share `F(τ)` of the ghost's colour from bins below `τ` (each bin's colour spread evenly over
+/// its span of `τ`) and its integral `H(τ) = ∫₀^τ F`, at [`NODES`]` + 1` even nodes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FringeTable {
+    /// `[F_r, F_g, F_b, H_r, H_g, H_b]` at node `i` (`τ = i / NODES`).
+    nodes: Vec<[f32; 6]>,
+}
+
+impl FringeTable {
+    /// The table of bins spread evenly over `spans` (`[lo, hi]` within `[0, 1]`, `lo < hi`;
+    /// neighbours may overlap) with colours `colours` (per bin, any sign); `None` when a
+    /// channel's total is too small against the others' to be split into shares.
+    pub fn new(spans: &[[f64; 2]], colours: &[[f64; 3]]) -> Option<FringeTable> {
+        if spans.len() != colours.len() || colours.is_empty() {
+            return None;
+        }
+        let total: [f64; 3] = std::array::from_fn(|c| colours.iter().map(|k| k[c]).sum());
+        let largest = total.iter().fold(0.0_f64, |m, t| m.max(t.abs()));
+        let bad = |x: f64| x.is_nan();
+        if total.iter().any(|&t| bad(t) || t.abs() < 1e-3 * largest)
+            || largest <= 0.0
+            || spans.iter().any(|s| bad(s[0]) || bad(s[1]) || s[0] >= s[1])
+        {
+            return None;
+        }
+        let f = |t: f64| -> [f64; 3] {
+            let mut acc = [0.0; 3];
+            for (s, colour) in spans.iter().zip(colours) {
+                let w = ((t - s[0]) / (s[1] - s[0])).clamp(0.0, 1.0);
+                for c in 0..3 {
+                    acc[c] += w * colour[c] / total[c];
+                }
+            }
+            acc
+        };
+        let mut nodes = Vec::with_capacity(NODES + 1);
+        let mut h = [0.0_f64; 3];
+        let mut prev = f(0.0);
+        for i in 0..=NODES {
+            let t = i as f64 / NODES as f64;
+            let fi = f(t);
+            if i > 0 {
+                // F is linear between nodes once tabulated: H by the trapezoid rule matches
+                // the lookup's own integral.
+                for c in 0..3 {
+                    h[c] += 0.5 * (prev[c] + fi[c]) / NODES as f64;
+                }
+            }
+            nodes.push([
+                fi[0] as f32,
+                fi[1] as f32,
+                fi[2] as f32,
+                h[0] as f32,
+                h[1] as f32,
+                h[2] as f32,
+            ]);
+            prev = fi;
+        }
+        Some(FringeTable { nodes })
+    }
+
+    /// `F(τ)`, 0 below the range and 1 above it.
+    #[inline]
+    fn share(&self, t: f32) -> [f32; 3] {
+        if t.is_nan() || t <= 0.0 {
+            return [0.0; 3];
+        }
+        if t >= 1.0 {
+            return [1.0; 3];
+        }
+        let x = t * NODES as f32;
+        let i = (x as usize).min(NODES - 1);
+        let s = x - i as f32;
+        let (a, b) = (&self.nodes[i], &self.nodes[i + 1]);
+        std::array::from_fn(|c| a[c] + s * (b[c] - a[c]))
+    }
+
+    /// `H(τ) = ∫₀^τ F`.
+    #[inline]
+    fn integral(&self, t: f32) -> [f32; 3] {
+        if t.is_nan() || t <= 0.0 {
+            return [0.0; 3];
+        }
+        if t >= 1.0 {
+            let end = &self.nodes[NODES];
+            let over = t - 1.0;
+            return [end[3] + over, end[4] + over, end[5] + over];
+        }
+        let x = t * NODES as f32;
+        let i = (x as usize).min(NODES - 1);
+        let s = x - i as f32;
+        let (a, b) = (&self.nodes[i], &self.nodes[i + 1]);
+        let h = 1.0 / NODES as f32;
+        std::array::from_fn(|c| a[3 + c] + h * s * (a[c] + 0.5 * s * (b[c] - a[c])))
+    }
+
+    /// The mean of `F` over `[a, b]` (`a ≤ b`).
+    #[inline]
+    fn mean_share(&self, a: f32, b: f32) -> [f32; 3] {
+        if b <= 0.0 {
+            return [0.0; 3];
+        }
+        if a >= 1.0 {
+            return [1.0; 3];
+        }
+        let w = b - a;
+        if w.is_nan() || w <= 1e-5 {
+            return self.share(0.5 * (a + b));
+        }
+        let (ha, hb) = (self.integral(a), self.integral(b));
+        std::array::from_fn(|c| (hb[c] - ha[c]) / w)
+    }
+}
+
+/// A linear ramp of the open share over `τ`: 0 at `closed`, 1 at `open`.
+#[derive(Clone, Copy, Debug)]
+struct Ramp {
+    closed: f32,
+    open: f32,
+}
+
+/// Shades [`FringeAttrs`] triangles: the summed irradiance times each channel's share of the
+/// ghost's colour over the open interval of `τ`.
+#[derive(Debug)]
+pub struct FringeShader<'a> {
+    pub tables: &'a [FringeTable],
+}
+
+impl FringeShader<'_> {
+    /// The open share by quadrature over `τ` (256 steps, the feather's own smoothstep, the
+    /// stop's exact radius): the oracle of the tests.
+    #[cfg(test)]
+    fn quad_share(&self, a: &FringeAttrs) -> [f32; 3] {
+        let f = a[9];
+        let table = &self.tables[a[11] as usize];
+        let q = 256;
+        let mut acc = [0.0f32; 3];
+        let mut prev = [0.0f32; 3];
+        for i in 0..q {
+            let t1 = (i + 1) as f32 / q as f32;
+            let t = (i as f32 + 0.5) / q as f32;
+            let next = table.share(t1);
+            let r = a[3] + t * a[4];
+            let mut w = smooth(1.0 + 0.5 * f, 1.0 - 0.5 * f, r);
+            if a[10] > 0.5 {
+                let (u, v) = (a[5] + t * a[6], a[7] + t * a[8]);
+                w *= smooth(0.5 * f, -0.5 * f, (u * u + v * v).sqrt() - 1.0);
+            }
+            for c in 0..3 {
+                acc[c] += w * (next[c] - prev[c]);
+            }
+            prev = next;
+        }
+        acc
+    }
+
+    /// The open share per channel at a pixel with attributes `a` (no aperture outline unless
+    /// flagged).
+    #[inline]
+    fn open_share(&self, a: &FringeAttrs) -> [f32; 3] {
+        let full = a[9];
+        // Where a value does not move with τ, the feather's own smoothstep; where it does, a
+        // linear ramp over τ as wide as the smoothstep's spread: the same mean and variance
+        // (a uniform spread of width w has variance w²/12, the smoothstep's slope 6x(1 − x)
+        // one of 1/20 over its width).
+        let still = |x: f32| smooth(1.0 + 0.5 * full, 1.0 - 0.5 * full, x);
+        let f = full * RAMP_WIDTH;
+        let (inner, outer) = (1.0 - 0.5 * f, 1.0 + 0.5 * f);
+        let mut factor = 1.0_f32;
+        // Lower (open above) and upper (open below) ends of the open interval: the clip's and
+        // the stop's, up to two each.
+        let mut lower = [None::<Ramp>; 2];
+        let mut upper = [None::<Ramp>; 2];
+        // The clip radius r(τ) = r0 + τ r1, open below 1.
+        let (r0, r1) = (a[3], a[4]);
+        if r1.abs() < 1e-9 {
+            factor *= still(r0);
+        } else {
+            let ramp = Ramp {
+                closed: (outer - r0) / r1,
+                open: (inner - r0) / r1,
+            };
+            if r1 > 0.0 {
+                upper[0] = Some(ramp);
+            } else {
+                lower[0] = Some(ramp);
+            }
+        }
+        if a[10] > 0.5 {
+            // The circular stop: |(u0, v0) + τ (u1, v1)| open below 1.
+            let (u0, u1, v0, v1) = (a[5], a[6], a[7], a[8]);
+            let dd = u1 * u1 + v1 * v1;
+            if dd < 1e-14 {
+                factor *= still((u0 * u0 + v0 * v0).sqrt());
+            } else {
+                let tc = -(u0 * u1 + v0 * v1) / dd;
+                let (pu, pv) = (u0 + tc * u1, v0 + tc * v1);
+                let q2 = pu * pu + pv * pv;
+                if q2 >= outer * outer {
+                    return [0.0; 3];
+                }
+                let reach = |q: f32| ((q * q - q2).max(0.0) / dd).sqrt();
+                let (h_out, h_in) = (reach(outer), reach(inner));
+                if q2 > inner * inner {
+                    // Never wholly open: the peak share at the closest approach.
+                    factor *= still(q2.sqrt());
+                }
+                lower[1] = Some(Ramp {
+                    closed: tc - h_out,
+                    open: tc - h_in,
+                });
+                upper[1] = Some(Ramp {
+                    closed: tc + h_out,
+                    open: tc + h_in,
+                });
+            }
+        }
+        if factor == 0.0 {
+            return [0.0; 3];
+        }
+        // Ends wholly outside τ ∈ [0, 1] either close everything or nothing; those that reach
+        // into it are the active ones.
+        let mut active = [None::<(Ramp, bool)>; 4];
+        let mut count = 0;
+        for (r, is_upper) in upper
+            .iter()
+            .flatten()
+            .map(|r| (r, true))
+            .chain(lower.iter().flatten().map(|r| (r, false)))
+        {
+            let (a0, a1) = (r.closed.min(r.open), r.closed.max(r.open));
+            if a1 <= 0.0 || a0 >= 1.0 {
+                // Wholly before or after the range: open or closed throughout.
+                let open_throughout = (r.open <= r.closed) == (a0 >= 1.0);
+                if !open_throughout {
+                    return [0.0; 3];
+                }
+                continue;
+            }
+            active[count] = Some((*r, is_upper));
+            count += 1;
+        }
+        let table = &self.tables[a[11] as usize];
+        let share = match count {
+            0 => [1.0; 3],
+            1 => {
+                let (r, is_upper) = active[0].expect("one active end");
+                if is_upper {
+                    // The share below the end: the mean of F over its ramp.
+                    table.mean_share(r.open, r.closed)
+                } else {
+                    let below = table.mean_share(r.closed, r.open);
+                    std::array::from_fn(|c| 1.0 - below[c])
+                }
+            }
+            // Two ends overlap in the range (a corner of the clip and the stop): their ramps'
+            // product, summed over the table's steps.
+            _ => {
+                let weight = |t: f32| {
+                    active[..count].iter().flatten().fold(1.0_f32, |w, (r, _)| {
+                        w * ((t - r.closed) / (r.open - r.closed)).clamp(0.0, 1.0)
+                    })
+                };
+                let mut acc = [0.0_f32; 3];
+                let mut prev = [0.0_f32; 3];
+                for i in 0..CORNER_STEPS {
+                    let next = table.share((i + 1) as f32 / CORNER_STEPS as f32);
+                    let w = weight((i as f32 + 0.5) / CORNER_STEPS as f32);
+                    for c in 0..3 {
+                        acc[c] += w * (next[c] - prev[c]);
+                    }
+                    prev = next;
+                }
+                acc
+            }
+        };
+        share.map(|v| factor * v)
+    }
+}
+
+/// 0 at `edge0`, 1 at `edge1`, smooth (C¹) in between: the feather, as
+/// [`super::render`]'s edge shader has it.
+#[inline]
+fn smooth(edge0: f32, edge1: f32, x: f32) -> f32 {
+    let t = ((x - edge0) / (edge1 - edge0)).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
+impl Shader<12> for FringeShader<'_> {
+    #[inline]
+    fn shade(&self, a: &FringeAttrs) -> [f32; 3] {
+        let s = self.open_share(a);
+        [a[0] * s[0], a[1] * s[1], a[2] * s[2]]
+    }
+
+    /// The clip radius over `τ ∈ [0, 1]` lies between `r0` and `r0 + r1`, both affine along the
+    /// row: the pixels where both are beyond the outer feather are dark, those where both are
+    /// within the inner one (and the stop is not flagged) wholly open.
+    fn split_row(&self, a: &FringeAttrs, step: &FringeAttrs, n: usize) -> RowSplit {
+        let f = f64::from(a[9]);
+        let bounds = [1.0 + 0.5 * f + SPLIT_MARGIN, 1.0 - 0.5 * f - SPLIT_MARGIN];
+        let (r0, d0) = (f64::from(a[3]), f64::from(step[3]));
+        let (r1, d1) = (f64::from(a[3] + a[4]), f64::from(step[3] + step[4]));
+        let (lit0, core0) = linear_split(r0, d0, bounds, n);
+        let (lit1, core1) = linear_split(r1, d1, bounds, n);
+        // Lit where either end is inside (the hull of the two), open where both are.
+        let lit = match (lit0.is_empty(), lit1.is_empty()) {
+            (true, true) => 0..0,
+            (true, false) => lit1,
+            (false, true) => lit0,
+            (false, false) => lit0.start.min(lit1.start)..lit0.end.max(lit1.end),
+        };
+        let core = if a[10] > 0.5 {
+            0..0
+        } else {
+            core0.start.max(core1.start)..core0.end.min(core1.end)
+        };
+        RowSplit { lit, core }
+    }
+
+    #[inline]
+    fn shade_core(&self, a: &FringeAttrs) -> [f32; 3] {
+        [a[0], a[1], a[2]]
+    }
+}
+
+/// Traces `path` at every band of `bands` (at least two, over the bins whose edges in
+/// wavelength are `edges_nm`, one more than the bands) and appends one triangle per grid
+/// triangle where the bands' images follow the fringe model, and one per band elsewhere
+/// ([`super::render::BandTriangles::push`]). Only for the circular stop: another aperture
+/// (or fewer than two bands, or a colour whose channels cannot be split) is meshed band by
+/// band.
+#[allow(clippy::too_many_arguments)]
+pub fn mesh_ghost_fringed(
+    ctx: &GhostContext<'_>,
+    path: GhostPath,
+    bounds: &GhostBounds,
+    n: usize,
+    light: &GhostLight,
+    bands: &[BandRef<'_>],
+    edges_nm: &[f64],
+    grids: &mut Vec<GridTrace>,
+    mesh: &mut GhostMesh,
+) -> GhostStats {
+    let m = bands.len();
+    let mut stats = GhostStats::default();
+    if grids.len() < m {
+        grids.resize_with(m, GridTrace::default);
+    }
+    for (band, grid) in bands.iter().zip(grids.iter_mut()) {
+        if !trace_band(ctx, path, bounds, n, light, band, grid) {
+            return stats;
+        }
+        stats.rays += n * n;
+    }
+    let sampler = ctx.aperture.sampler();
+    let emits: Vec<BandTriangles<'_>> = bands
+        .iter()
+        .zip(grids.iter())
+        .map(|(band, grid)| BandTriangles::new(ctx, bounds, n, light, band, &sampler, grid))
+        .collect();
+    let per_band = |tri: [usize; 3], mesh: &mut GhostMesh, stats: &mut GhostStats| {
+        for emit in &emits {
+            if let Some(flux) = emit.push(tri, mesh) {
+                stats.flux += flux;
+                stats.triangles += 1;
+            }
+        }
+    };
+    // The dispersion coordinate τ (1/λ², in which the geometry is nearly linear) of the
+    // bands. Each bin's colour is spread evenly over a span of τ as wide as its own but
+    // centred on its band, so that its fringe sits where its band was traced (1/λ² is convex:
+    // a bin's centre wavelength is not its span's middle); τ is then scaled so the spans
+    // cover [0, 1].
+    let table = (edges_nm.len() == m + 1 && m >= 2 && matches!(ctx.aperture, Aperture::Circular))
+        .then(|| {
+            let inv = |l: f64| 1.0 / (l * l);
+            let raw: Vec<[f64; 2]> = bands
+                .iter()
+                .enumerate()
+                .map(|(b, band)| {
+                    let half = 0.5 * (inv(edges_nm[b]) - inv(edges_nm[b + 1])).abs();
+                    let c = inv(band.lambda_nm);
+                    [c - half, c + half]
+                })
+                .collect();
+            let lo = raw.iter().fold(f64::INFINITY, |a, s| a.min(s[0]));
+            let hi = raw.iter().fold(f64::NEG_INFINITY, |a, s| a.max(s[1]));
+            let tau = |t: f64| (t - lo) / (hi - lo);
+            let spans: Vec<[f64; 2]> = raw.iter().map(|s| s.map(tau)).collect();
+            let colours: Vec<[f64; 3]> = emits
+                .iter()
+                .map(|e| {
+                    let passed: f64 = (0..n * n)
+                        .filter(|&k| e.grid.passes(k))
+                        .map(|k| f64::from(e.grid.weight[k]))
+                        .sum();
+                    e.rgb.map(|c| f64::from(c) * passed)
+                })
+                .collect();
+            let centres: Vec<f64> = bands.iter().map(|b| tau(inv(b.lambda_nm))).collect();
+            FringeTable::new(&spans, &colours).map(|t| (t, centres))
+        })
+        .flatten();
+    let Some((table, centres)) = table else {
+        for tri in grid_triangles(n) {
+            per_band(tri, mesh, &mut stats);
+        }
+        return stats;
+    };
+    let id = mesh.fringe_tables.len() as f32;
+    mesh.fringe_tables.push(table);
+    let model = LineFit::new(&centres);
+    let feather = emits[0].feather;
+    let tolerance = 0.25 * f64::from(feather);
+    let min_area = emits.iter().fold(0.0_f64, |a, e| a.max(e.min_area));
+    let (o0, e0, f0) = (mesh.open.len(), mesh.edge.len(), mesh.fringe.len());
+    let mut failed = 0_usize;
+    let mut areas = vec![0.0_f64; m];
+    let mut values: Vec<[[f64; 3]; 3]> = vec![[[0.0_f64; 3]; 3]; m];
+    for tri in grid_triangles(n) {
+        let all_done = emits
+            .iter()
+            .all(|e| tri.iter().all(|&k| e.grid.completed[k]));
+        if !all_done {
+            failed += 1;
+            per_band(tri, mesh, &mut stats);
+            continue;
+        }
+        if emits
+            .iter()
+            .all(|e| tri.iter().all(|&k| e.grid.max_rel[k] > 1.0 + feather))
+        {
+            continue;
+        }
+        // The mean triangle, and each band's triangle's orientation and area.
+        let mut mean = [[0.0_f64; 2]; 3];
+        let (mut smallest, mut largest) = (f64::INFINITY, 0.0_f64);
+        let mut sign = 0.0_f64;
+        let mut consistent = true;
+        for (e, area) in emits.iter().zip(areas.iter_mut()) {
+            let p = tri.map(|k| e.sensor(k));
+            let a2 = cross(sub(p[1], p[0]), sub(p[2], p[0]));
+            *area = 0.5 * a2.abs();
+            if sign == 0.0 {
+                sign = a2.signum();
+            }
+            consistent &= a2 * sign > 0.0;
+            smallest = smallest.min(a2.abs());
+            largest = largest.max(a2.abs());
+            for (acc, q) in mean.iter_mut().zip(p) {
+                acc[0] += q[0] / m as f64;
+                acc[1] += q[1] / m as f64;
+            }
+        }
+        let mean_a2 = cross(sub(mean[1], mean[0]), sub(mean[2], mean[0]));
+        if !consistent
+            || mean_a2.is_nan()
+            || mean_a2 * sign <= 0.0
+            || largest > MAX_AREA_RATIO * smallest
+            || 0.5 * mean_a2.abs() < min_area
+        {
+            failed += 1;
+            per_band(tri, mesh, &mut stats);
+            continue;
+        }
+        // Each band's clip radius and stop crossing, extended affinely to the mean corners.
+        for (e, vals) in emits.iter().zip(values.iter_mut()) {
+            let p = tri.map(|k| e.sensor(k));
+            let (e1, e2) = (sub(p[1], p[0]), sub(p[2], p[0]));
+            let inv = 1.0 / cross(e1, e2);
+            let at = tri.map(|k| {
+                let uv = e.stop_uv(k);
+                [
+                    f64::from(e.grid.max_rel[k]),
+                    f64::from(uv[0]),
+                    f64::from(uv[1]),
+                ]
+            });
+            for (c, q) in mean.iter().enumerate() {
+                let d = sub(*q, p[0]);
+                let (w1, w2) = (cross(d, e2) * inv, cross(e1, d) * inv);
+                vals[c] = std::array::from_fn(|x| {
+                    at[0][x] + w1 * (at[1][x] - at[0][x]) + w2 * (at[2][x] - at[0][x])
+                });
+            }
+        }
+        let mut lines = [[[0.0_f64; 2]; 3]; 3];
+        let mut residual = [0.0_f64; 3];
+        for (c, line) in lines.iter_mut().enumerate() {
+            for (x, l) in line.iter_mut().enumerate() {
+                let (fit, r) = model.fit(values.iter().map(|v| v[c][x]));
+                *l = fit;
+                residual[x] = residual[x].max(r);
+            }
+        }
+        // Open when, at both ends of τ, every corner is within the clip and the (convex)
+        // stop by half a feather: the radius is linear and the disc convex, so it is between.
+        let inner = 1.0 - 0.5 * f64::from(feather);
+        let end = |line: [f64; 2], t: f64| line[0] + t * line[1];
+        let radius_open = lines
+            .iter()
+            .all(|l| end(l[0], 0.0) <= inner && end(l[0], 1.0) <= inner);
+        let stop_open = lines.iter().all(|l| {
+            [0.0, 1.0].iter().all(|&t| {
+                let uv = [end(l[1], t) as f32, end(l[2], t) as f32];
+                emits[0].inside_aperture(uv)
+            })
+        });
+        // Where an edge crosses the triangle, the bands' values there must follow their lines
+        // (the stop's only where its outline is drawn); inside, the mean triangle is all.
+        let open = radius_open && stop_open;
+        let follows = residual[0] <= tolerance
+            && (stop_open || (residual[1] <= tolerance && residual[2] <= tolerance));
+        if !open && !follows {
+            failed += 1;
+            per_band(tri, mesh, &mut stats);
+            continue;
+        }
+        let mut flux = 0.0;
+        let mut colours = [[0.0_f32; 3]; 3];
+        // Each band's irradiance as in its own triangle: what band `b` adds at a point of the
+        // sensor is its flux over its own area there, wherever the mean triangle puts it (over
+        // the mean area, a band whose image is larger than the mean would gain light).
+        for (e, &area) in emits.iter().zip(&areas) {
+            flux += e.flux(tri);
+            let irr = e.irradiance_over(area) as f32;
+            for (colour, &k) in colours.iter_mut().zip(&tri) {
+                let w = irr * e.grid.weight[k];
+                for (v, c) in colour.iter_mut().zip(e.rgb) {
+                    *v += c * w;
+                }
+            }
+        }
+        stats.flux += flux;
+        stats.triangles += 1;
+        let pixels = mean.map(|q| emits[0].to_pixel(q));
+        if open {
+            mesh.open.push(pixels, colours);
+        } else {
+            let flag = if stop_open { 0.0 } else { 1.0 };
+            let corner = |c: usize| -> FringeAttrs {
+                let [r, u, v] = lines[c];
+                let [red, green, blue] = colours[c];
+                [
+                    red,
+                    green,
+                    blue,
+                    r[0] as f32,
+                    r[1] as f32,
+                    u[0] as f32,
+                    u[1] as f32,
+                    v[0] as f32,
+                    v[1] as f32,
+                    feather,
+                    flag,
+                    id,
+                ]
+            };
+            mesh.fringe.push(pixels, [corner(0), corner(1), corner(2)]);
+        }
+    }
+    // Too many triangles off the model: the whole ghost band by band (where fringed and
+    // band-by-band triangles meet, their seams differ per band).
+    if failed as f64 > MAX_FAILED_SHARE * (2 * (n - 1) * (n - 1)) as f64 {
+        mesh.open.truncate_to(o0);
+        mesh.edge.truncate_to(e0);
+        mesh.fringe.truncate_to(f0);
+        mesh.fringe_tables.pop();
+        stats = GhostStats {
+            rays: stats.rays,
+            ..GhostStats::default()
+        };
+        for tri in grid_triangles(n) {
+            per_band(tri, mesh, &mut stats);
+        }
+    }
+    stats
+}
+
+/// Least-squares lines over fixed abscissae.
+struct LineFit<'a> {
+    x: &'a [f64],
+    mean: f64,
+    sxx: f64,
+}
+
+impl<'a> LineFit<'a> {
+    fn new(x: &'a [f64]) -> Self {
+        let mean = x.iter().sum::<f64>() / x.len() as f64;
+        let sxx = x.iter().map(|v| (v - mean) * (v - mean)).sum();
+        LineFit { x, mean, sxx }
+    }
+
+    /// `[intercept, slope]` of the line through `y` (one value per abscissa) and the largest
+    /// distance of a value from it.
+    fn fit(&self, y: impl Iterator<Item = f64> + Clone) -> ([f64; 2], f64) {
+        let ym = y.clone().sum::<f64>() / self.x.len() as f64;
+        let sxy: f64 = self
+            .x
+            .iter()
+            .zip(y.clone())
+            .map(|(x, y)| (x - self.mean) * (y - ym))
+            .sum();
+        let slope = if self.sxx > 0.0 { sxy / self.sxx } else { 0.0 };
+        let intercept = ym - slope * self.mean;
+        let residual = self
+            .x
+            .iter()
+            .zip(y)
+            .map(|(x, y)| (y - intercept - slope * x).abs())
+            .fold(0.0, f64::max);
+        ([intercept, slope], residual)
+    }
+}
+
+fn sub(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
+    [a[0] - b[0], a[1] - b[1]]
+}
+
+fn cross(a: [f64; 2], b: [f64; 2]) -> f64 {
+    a[0] * b[1] - a[1] * b[0]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// Five bins of unequal spans and colours (one channel negative in a bin, as a narrow
+    /// band's linear sRGB can be).
+    fn table() -> FringeTable {
+        let spans = [[0.0, 0.3], [0.25, 0.5], [0.5, 0.65], [0.6, 0.8], [0.8, 1.0]];
+        let colours = [
+            [0.1, 0.2, 1.0],
+            [-0.05, 0.5, 0.6],
+            [0.3, 1.0, 0.1],
+            [0.8, 0.6, 0.0],
+            [1.0, 0.1, 0.02],
+        ];
+        FringeTable::new(&spans, &colours).unwrap()
+    }
+
+    #[test]
+    fn a_table_runs_from_nothing_to_the_whole_colour() {
+        let t = table();
+        assert_eq!(t.share(-0.5), [0.0; 3]);
+        assert_eq!(t.share(0.0), [0.0; 3]);
+        assert_eq!(t.share(1.0), [1.0; 3]);
+        assert_eq!(t.share(2.0), [1.0; 3]);
+        for c in 0..3 {
+            assert!((t.nodes[NODES][c] - 1.0).abs() < 1e-6);
+        }
+        // The mean over an interval is the integral's difference over its width.
+        for (a, b) in [(0.1_f32, 0.4_f32), (-0.3, 0.2), (0.7, 1.6), (0.33, 0.3301)] {
+            let m = t.mean_share(a, b);
+            let steps = 20_000;
+            for (c, mc) in m.iter().enumerate() {
+                let sum: f32 = (0..steps)
+                    .map(|i| t.share(a + (b - a) * (i as f32 + 0.5) / steps as f32)[c])
+                    .sum();
+                let expected = sum / steps as f32;
+                assert!((mc - expected).abs() < 2e-4, "[{a}, {b}] channel {c}");
+            }
+        }
+        // A channel with (almost) no colour cannot be split.
+        assert!(FringeTable::new(&[[0.0, 0.5], [0.5, 1.0]], &[[1.0, 1.0, 0.0]; 2]).is_none());
+        assert!(FringeTable::new(&[[0.5, 0.5]], &[[1.0; 3]]).is_none());
+    }
+
+    fn attrs(
+        rgb: [f32; 3],
+        r: [f32; 2],
+        u: [f32; 2],
+        v: [f32; 2],
+        f: f32,
+        flag: bool,
+    ) -> FringeAttrs {
+        let flag = if flag { 1.0 } else { 0.0 };
+        [
+            rgb[0], rgb[1], rgb[2], r[0], r[1], u[0], u[1], v[0], v[1], f, flag, 0.0,
+        ]
+    }
+
+    /// Across a straight clip edge, the light the shader adds is what the bands add: the
+    /// share integrated over the clip radius moves the edge by the colour's mean `τ` times
+    /// the radius's change over `τ`, whatever the ramp's shape.
+    #[test]
+    fn a_fringed_edge_keeps_each_colour_s_light() {
+        let tables = [table()];
+        let shader = FringeShader { tables: &tables };
+        let t = &tables[0];
+        // The colour's mean τ per channel: ∫ τ dF = 1 − ∫₀¹ F.
+        let integral = t.integral(1.0);
+        for r1 in [0.05_f32, -0.03, 0.2, 1e-12] {
+            let f = 0.01;
+            let (lo, hi, steps) = (0.0_f32, 2.0_f32, 200_000);
+            let dr = (hi - lo) / steps as f32;
+            let mut sum = [0.0_f64; 3];
+            for i in 0..steps {
+                let r0 = lo + (i as f32 + 0.5) * dr;
+                let s = shader.open_share(&attrs([1.0; 3], [r0, r1], [0.0; 2], [0.0; 2], f, false));
+                for c in 0..3 {
+                    sum[c] += f64::from(s[c]) * f64::from(dr);
+                }
+            }
+            for c in 0..3 {
+                // Band at τ is open for r0 < 1 − τ r1: on average 1 − r1 · mean τ.
+                let mean_tau = f64::from(1.0 - integral[c]);
+                let expected = 1.0 - f64::from(r1) * mean_tau;
+                assert!(
+                    (sum[c] - expected).abs() < 2e-4,
+                    "r1 {r1} channel {c}: {} against {expected}",
+                    sum[c]
+                );
+            }
+        }
+    }
+
+    proptest! {
+        /// The analytic share against quadrature over τ with the feather's smoothstep and
+        /// the stop's exact radius: the same within a few per cent of the whole colour (the
+        /// ramps are linear and the clip's and the stop's ends are taken one at a time).
+        #[test]
+        fn the_share_follows_the_bands(
+            r0 in 0.9_f32..1.1, r1 in -0.1_f32..0.1,
+            u0 in -1.1_f32..1.1, u1 in -0.1_f32..0.1,
+            v0 in -1.1_f32..1.1, v1 in -0.1_f32..0.1,
+            f in 0.002_f32..0.05,
+            flag in prop::bool::ANY,
+        ) {
+            let tables = [table()];
+            let shader = FringeShader { tables: &tables };
+            let a = attrs([1.0; 3], [r0, r1], [u0, u1], [v0, v1], f, flag);
+            let (s, q) = (shader.open_share(&a), shader.quad_share(&a));
+            for c in 0..3 {
+                prop_assert!((s[c] - q[c]).abs() < 0.06, "channel {}: {:?} against {:?}", c, s, q);
+            }
+        }
+
+        /// Pixels left out of a row's lit span shade to zero, and those in its core shade as
+        /// the wholly open triangle.
+        #[test]
+        fn a_fringed_row_s_split_keeps_every_pixel_s_shade(
+            rgb in prop::array::uniform3(0.1_f32..10.0),
+            r0 in 0.8_f32..1.2, r1 in -0.1_f32..0.1, dr0 in -0.02_f32..0.02, dr1 in -0.01_f32..0.01,
+            u0 in -1.1_f32..1.1, v0 in -1.1_f32..1.1,
+            f in 1e-4_f32..0.05,
+            flag in prop::bool::ANY,
+            n in 1_usize..64,
+        ) {
+            let tables = [table()];
+            let shader = FringeShader { tables: &tables };
+            let a = attrs(rgb, [r0, r1], [u0, 0.02], [v0, -0.01], f, flag);
+            let mut step = [0.0_f32; 12];
+            step[0] = 0.01;
+            step[3] = dr0;
+            step[4] = dr1;
+            step[5] = 0.01;
+            let split = shader.split_row(&a, &step, n);
+            prop_assert!(split.lit.end <= n && split.core.end <= n);
+            let mut x = a;
+            for k in 0..n {
+                let full = shader.shade(&x);
+                if !split.lit.contains(&k) {
+                    prop_assert_eq!(full, [0.0; 3], "pixel {} outside {:?}", k, split.lit);
+                } else if split.core.contains(&k) {
+                    prop_assert_eq!(full, shader.shade_core(&x), "pixel {} in core", k);
+                }
+                for (v, d) in x.iter_mut().zip(&step) {
+                    *v += d;
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn appended_fringes_keep_their_tables() {
+        let mut a = GhostMesh::default();
+        let mut b = GhostMesh::default();
+        let tri = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
+        a.fringe_tables.push(table());
+        a.fringe.push(
+            tri,
+            [attrs([1.0; 3], [0.5, 0.0], [0.0; 2], [0.0; 2], 0.01, false); 3],
+        );
+        b.fringe_tables.push(table());
+        b.fringe_tables.push(table());
+        let mut second = attrs([1.0; 3], [0.5, 0.0], [0.0; 2], [0.0; 2], 0.01, false);
+        second[11] = 1.0;
+        b.fringe.push(tri, [second; 3]);
+        a.append(&b);
+        assert_eq!(a.fringe_tables.len(), 3);
+        assert_eq!(a.fringe.attrs[0][11], 0.0);
+        assert_eq!(a.fringe.attrs[3][11], 2.0);
+        a.fringe.truncate_to(1);
+        assert_eq!((a.fringe.len(), a.fringe.attrs.len()), (1, 3));
+    }
+}
