@@ -33,7 +33,7 @@ use super::enumerate::GhostPath;
 use super::grid::GridTrace;
 use super::render::{
     BandRef, BandTriangles, GhostContext, GhostLight, GhostMesh, GhostStats, SPLIT_MARGIN,
-    grid_triangles, linear_split, trace_band,
+    grid_triangles, intersect, linear_split, parabola_split, trace_band,
 };
 
 /// Attributes of a fringed triangle's corner: summed RGB irradiance, the clip radius at
@@ -236,9 +236,12 @@ impl FringeShader<'_> {
         // the stop's, up to two each.
         let mut lower = [None::<Ramp>; 2];
         let mut upper = [None::<Ramp>; 2];
-        // The clip radius r(τ) = r0 + τ r1, open below 1.
+        // The clip radius r(τ) = r0 + τ r1, open below 1 (wholly, at every τ in [0, 1], when
+        // within the feather at both ends).
         let (r0, r1) = (a[3], a[4]);
-        if r1.abs() < 1e-9 {
+        let wholly = 1.0 - 0.5 * full;
+        if r0 < wholly && r0 + r1 < wholly {
+        } else if r1.abs() < 1e-9 {
             factor *= still(r0);
         } else {
             let ramp = Ramp {
@@ -251,9 +254,11 @@ impl FringeShader<'_> {
                 lower[0] = Some(ramp);
             }
         }
-        if a[10] > 0.5 {
-            // The circular stop: |(u0, v0) + τ (u1, v1)| open below 1.
-            let (u0, u1, v0, v1) = (a[5], a[6], a[7], a[8]);
+        // The circular stop: |(u0, v0) + τ (u1, v1)| open below 1 (wholly, the disc being
+        // convex, when both ends are within the feather).
+        let (u0, u1, v0, v1) = (a[5], a[6], a[7], a[8]);
+        let inside = |u: f32, v: f32| u * u + v * v < wholly * wholly;
+        if a[10] > 0.5 && !(inside(u0, v0) && inside(u0 + u1, v0 + v1)) {
             let dd = u1 * u1 + v1 * v1;
             if dd < 1e-14 {
                 factor *= still((u0 * u0 + v0 * v0).sqrt());
@@ -360,7 +365,8 @@ impl Shader<12> for FringeShader<'_> {
 
     /// The clip radius over `τ ∈ [0, 1]` lies between `r0` and `r0 + r1`, both affine along the
     /// row: the pixels where both are beyond the outer feather are dark, those where both are
-    /// within the inner one (and the stop is not flagged) wholly open.
+    /// within the inner one (and, where the stop is flagged, both ends of the stop crossing's
+    /// segment inside the stop's inner feather) wholly open.
     fn split_row(&self, a: &FringeAttrs, step: &FringeAttrs, n: usize) -> RowSplit {
         let f = f64::from(a[9]);
         let bounds = [1.0 + 0.5 * f + SPLIT_MARGIN, 1.0 - 0.5 * f - SPLIT_MARGIN];
@@ -375,11 +381,25 @@ impl Shader<12> for FringeShader<'_> {
             (false, true) => lit0,
             (false, false) => lit0.start.min(lit1.start)..lit0.end.max(lit1.end),
         };
-        let core = if a[10] > 0.5 {
-            0..0
-        } else {
-            core0.start.max(core1.start)..core0.end.min(core1.end)
-        };
+        let mut core = core0.start.max(core1.start)..core0.end.min(core1.end);
+        if a[10] > 0.5 && !core.is_empty() {
+            // The stop, where both ends of τ's segment are inside it (the disc is convex):
+            // each end's `u² + v²` is a parabola along the row.
+            for (u, v, du, dv) in [
+                (a[5], a[7], step[5], step[7]),
+                (a[5] + a[6], a[7] + a[8], step[5] + step[6], step[7] + step[8]),
+            ] {
+                let (_, inside) = parabola_split(
+                    f64::from(u),
+                    f64::from(v),
+                    f64::from(du),
+                    f64::from(dv),
+                    bounds,
+                    n,
+                );
+                core = intersect(core, if bounds[1] > 0.0 { inside } else { 0..0 });
+            }
+        }
         RowSplit { lit, core }
     }
 

@@ -730,7 +730,7 @@ pub(crate) fn linear_split(
 
 /// The pixels `k` in `[0, n)` with `|(u, v) + k (du, dv)| < outer`, and those with it
 /// `< inner`.
-fn parabola_split(
+pub(crate) fn parabola_split(
     u: f64,
     v: f64,
     du: f64,
@@ -780,7 +780,7 @@ fn after_index(x: f64, n: usize) -> usize {
     }
 }
 
-fn intersect(a: std::ops::Range<usize>, b: std::ops::Range<usize>) -> std::ops::Range<usize> {
+pub(crate) fn intersect(a: std::ops::Range<usize>, b: std::ops::Range<usize>) -> std::ops::Range<usize> {
     a.start.max(b.start)..a.end.min(b.end)
 }
 
