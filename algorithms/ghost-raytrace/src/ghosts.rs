@@ -143,6 +143,14 @@ pub fn render_into(
 /// from 1.72% to 1.89%; with 8, 1.75% (3: 1.75%, 12: 1.88%).
 pub const FRINGE_GROUP: usize = 8;
 
+/// Drawn pixels (of the ghost's sensor rectangle) per grid triangle below which a ghost is
+/// drawn band by band: there the fringed meshing (each band's triangle extended to the mean
+/// one, the lines fitted, in f64) costs more than the pixels it saves. Measured
+/// (docs/performance.md): with every dispersive ghost fringed, the Nikon zoom's fast frame
+/// took 72–114 ms against 65–70 ms band by band; from 16 to 64 pixels a triangle, 58–68 ms,
+/// with the default frames' gains kept (at 256 they were lost).
+pub const FRINGE_MIN_PIXELS: f64 = 32.0;
+
 /// Triangles (about) made before they are rasterized: bounds the memory a group's meshes
 /// take (about 40 bytes a vertex, 30 MB at this size) while keeping rasterizer calls few.
 const BATCH_TRIANGLES: usize = 1 << 18;
@@ -163,8 +171,14 @@ fn render_group(
 ) {
     // Units of work: (index in `group`, a range of that ghost's bands), with their triangle
     // counts: a group of a fringed ghost's bands (split evenly), or one band.
+    let px = ctx.frame.pixel_mm();
     let fringed = |job: &GhostJob| {
-        !options.band_by_band && job.spectral() && matches!(ctx.aperture, Aperture::Circular)
+        // Worth it where a band's drawn area outweighs the extra meshing of its triangles.
+        let triangles = 2 * (job.grid.max(2) - 1).pow(2);
+        !options.band_by_band
+            && job.spectral()
+            && matches!(ctx.aperture, Aperture::Circular)
+            && job.bounds.sensor.area() / (px * px) >= FRINGE_MIN_PIXELS * triangles as f64
     };
     let units: Vec<(usize, std::ops::Range<usize>, usize)> = group
         .iter()

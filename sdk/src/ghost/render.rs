@@ -780,7 +780,10 @@ fn after_index(x: f64, n: usize) -> usize {
     }
 }
 
-pub(crate) fn intersect(a: std::ops::Range<usize>, b: std::ops::Range<usize>) -> std::ops::Range<usize> {
+pub(crate) fn intersect(
+    a: std::ops::Range<usize>,
+    b: std::ops::Range<usize>,
+) -> std::ops::Range<usize> {
     a.start.max(b.start)..a.end.min(b.end)
 }
 
