@@ -125,14 +125,23 @@ pub struct Bin {
     factors: Vec<[f64; 4]>,
 }
 
+/// Edge `i` (0 to `m`) of `m` equal bins over the sampled range: bin `i` spans edges `i` and
+/// `i + 1`.
+pub fn bin_edge_nm(m: usize, i: usize) -> f64 {
+    SAMPLING_MIN_NM + bin_width_nm(m) * i as f64
+}
+
+fn bin_width_nm(m: usize) -> f64 {
+    (SAMPLING_MAX_NM - SAMPLING_MIN_NM) / m.max(1) as f64
+}
+
 impl Bin {
     /// Bin `i` of `m` for `system`.
     pub fn new(system: &LensSystem, m: usize, i: usize) -> Bin {
-        let width = (SAMPLING_MAX_NM - SAMPLING_MIN_NM) / m.max(1) as f64;
-        let centre_nm = SAMPLING_MIN_NM + (i as f64 + 0.5) * width;
+        let centre_nm = SAMPLING_MIN_NM + (i as f64 + 0.5) * bin_width_nm(m);
         Bin {
-            lo_nm: SAMPLING_MIN_NM + width * i as f64,
-            hi_nm: SAMPLING_MIN_NM + width * (i + 1) as f64,
+            lo_nm: bin_edge_nm(m, i),
+            hi_nm: bin_edge_nm(m, i + 1),
             centre_nm,
             last: i + 1 >= m,
             factors: surface_factors(system, centre_nm),

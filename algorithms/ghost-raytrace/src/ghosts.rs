@@ -13,7 +13,6 @@
 
 use flarebench_sdk::LensSystem;
 use flarebench_sdk::aperture::Aperture;
-use flarebench_sdk::color::{SAMPLING_MAX_NM, SAMPLING_MIN_NM};
 use flarebench_sdk::ghost::GridTrace;
 use flarebench_sdk::ghost::fringe::mesh_ghost_fringed;
 use flarebench_sdk::ghost::render::{
@@ -26,6 +25,7 @@ use flarebench_sdk::spectrum::LAMBDA_D_NM;
 use rayon::prelude::*;
 
 use crate::GhostRenderError;
+use crate::colour::bin_edge_nm;
 use crate::plan::{GhostJob, LightPlan};
 
 /// How to carry out a plan.
@@ -172,9 +172,8 @@ fn render_group(
     // Units of work: (index in `group`, a range of that ghost's bands), with their triangle
     // counts: a group of a fringed ghost's bands (split evenly), or one band.
     let px = ctx.frame.pixel_mm();
-    let fringed = |job: &GhostJob| {
+    let fringed = |job: &GhostJob, triangles: usize| {
         // Worth it where a band's drawn area outweighs the extra meshing of its triangles.
-        let triangles = 2 * (job.grid.max(2) - 1).pow(2);
         !options.band_by_band
             && job.spectral()
             && matches!(ctx.aperture, Aperture::Circular)
@@ -187,7 +186,7 @@ fn render_group(
             let job = &plans[l].ghosts[g];
             let triangles = 2 * (job.grid.max(2) - 1).pow(2);
             let m = job.bands.len();
-            let groups = if fringed(job) {
+            let groups = if fringed(job, triangles) {
                 m.div_ceil(FRINGE_GROUP)
             } else {
                 m
@@ -219,20 +218,19 @@ fn render_group(
                         phi: lp.light.phi_deg.to_radians(),
                         irradiance: 1.0,
                     };
+                    // Most triangles open (or fringed); the rest on an edge, band by band.
                     let mut mesh = GhostMesh::default();
+                    mesh.open.reserve(triangles);
                     let band = |b: usize| BandRef {
                         rgb: job.bands[b].rgb,
                         ..lp.bands[job.bands[b].band].as_ref()
                     };
                     let s = if range.len() > 1 {
-                        // Most triangles open or fringed; the rest band by band.
-                        mesh.open.reserve(triangles);
                         mesh.fringe.reserve(triangles / 2);
                         let bands: Vec<BandRef<'_>> = range.clone().map(band).collect();
                         let m = job.bands.len();
-                        let width = (SAMPLING_MAX_NM - SAMPLING_MIN_NM) / m as f64;
                         let edges: Vec<f64> = (range.start..=range.end)
-                            .map(|i| SAMPLING_MIN_NM + width * i as f64)
+                            .map(|i| bin_edge_nm(m, i))
                             .collect();
                         mesh_ghost_fringed(
                             ctx,
@@ -246,7 +244,6 @@ fn render_group(
                             &mut mesh,
                         )
                     } else {
-                        mesh.open.reserve(triangles);
                         mesh.edge.reserve(triangles / 2);
                         mesh_ghost(
                             ctx,

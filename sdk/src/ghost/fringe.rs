@@ -38,7 +38,7 @@ use super::enumerate::GhostPath;
 use super::grid::GridTrace;
 use super::render::{
     BandRef, BandTriangles, GhostContext, GhostLight, GhostMesh, GhostStats, SPLIT_MARGIN,
-    grid_triangles, intersect, linear_split, parabola_split, trace_band,
+    grid_triangles, intersect, linear_split, parabola_split, smoothstep, trace_band,
 };
 
 /// Attributes of a fringed triangle's corner: summed RGB irradiance, the clip radius at
@@ -90,10 +90,13 @@ impl FringeTable {
         }
         let total: [f64; 3] = std::array::from_fn(|c| colours.iter().map(|k| k[c]).sum());
         let largest = total.iter().fold(0.0_f64, |m, t| m.max(t.abs()));
-        let bad = |x: f64| x.is_nan();
-        if total.iter().any(|&t| bad(t) || t.abs() < 1e-3 * largest)
+        if total
+            .iter()
+            .any(|&t| t.is_nan() || t.abs() < 1e-3 * largest)
             || largest <= 0.0
-            || spans.iter().any(|s| bad(s[0]) || bad(s[1]) || s[0] >= s[1])
+            || spans
+                .iter()
+                .any(|s| s[0].is_nan() || s[1].is_nan() || s[0] >= s[1])
         {
             return None;
         }
@@ -212,10 +215,10 @@ impl FringeShader<'_> {
         for i in 0..steps {
             let next = table.share((i + 1) as f32 / steps as f32);
             let t = (i as f32 + 0.5) / steps as f32;
-            let mut w = smooth(1.0 + 0.5 * f, 1.0 - 0.5 * f, a[3] + t * a[4]);
+            let mut w = smoothstep(1.0 + 0.5 * f, 1.0 - 0.5 * f, a[3] + t * a[4]);
             if a[10] > 0.5 {
                 let (u, v) = (a[5] + t * a[6], a[7] + t * a[8]);
-                w *= smooth(1.0 + 0.5 * f, 1.0 - 0.5 * f, (u * u + v * v).sqrt());
+                w *= smoothstep(1.0 + 0.5 * f, 1.0 - 0.5 * f, (u * u + v * v).sqrt());
             }
             for c in 0..3 {
                 acc[c] += w * (next[c] - prev[c]);
@@ -234,7 +237,7 @@ impl FringeShader<'_> {
         // linear ramp over τ as wide as the smoothstep's spread: the same mean and variance
         // (a uniform spread of width w has variance w²/12, the smoothstep's slope 6x(1 − x)
         // one of 1/20 over its width).
-        let still = |x: f32| smooth(1.0 + 0.5 * full, 1.0 - 0.5 * full, x);
+        let still = |x: f32| smoothstep(1.0 + 0.5 * full, 1.0 - 0.5 * full, x);
         let f = full * RAMP_WIDTH;
         let (inner, outer) = (1.0 - 0.5 * f, 1.0 + 0.5 * f);
         let mut factor = 1.0_f32;
@@ -246,10 +249,10 @@ impl FringeShader<'_> {
         // within the feather at both ends).
         let (r0, r1) = (a[3], a[4]);
         let wholly = 1.0 - 0.5 * full;
-        if r0 < wholly && r0 + r1 < wholly {
-        } else if r1.abs() < 1e-9 {
+        let clip_open = r0 < wholly && r0 + r1 < wholly;
+        if !clip_open && r1.abs() < 1e-9 {
             factor *= still(r0);
-        } else {
+        } else if !clip_open {
             let ramp = Ramp {
                 closed: (outer - r0) / r1,
                 open: (inner - r0) / r1,
@@ -297,7 +300,13 @@ impl FringeShader<'_> {
         }
         // Ends wholly outside τ ∈ [0, 1] either close everything or nothing; those that reach
         // into it are the active ones.
-        let mut active = [None::<(Ramp, bool)>; 4];
+        let mut active = [(
+            Ramp {
+                closed: 0.0,
+                open: 0.0,
+            },
+            false,
+        ); 4];
         let mut count = 0;
         for (r, is_upper) in upper
             .iter()
@@ -314,7 +323,7 @@ impl FringeShader<'_> {
                 }
                 continue;
             }
-            active[count] = Some((*r, is_upper));
+            active[count] = (*r, is_upper);
             count += 1;
         }
         let table = &self.tables[a[11] as usize];
@@ -325,10 +334,9 @@ impl FringeShader<'_> {
         // (a corner of the clip and the stop): step by step.
         let wide = ends
             .iter()
-            .flatten()
             .any(|(r, _)| (r.open - r.closed).abs() > WIDE_RAMP);
-        let overlap = ends.iter().flatten().enumerate().any(|(i, (p, _))| {
-            ends[i + 1..].iter().flatten().any(|(q, _)| {
+        let overlap = ends.iter().enumerate().any(|(i, (p, _))| {
+            ends[i + 1..].iter().any(|(q, _)| {
                 let (a, b) = (span(p), span(q));
                 a.0 < b.1 && b.0 < a.1
             })
@@ -342,7 +350,7 @@ impl FringeShader<'_> {
         let mut below_hi = [1.0_f32; 3];
         let mut below_lo = [0.0_f32; 3];
         let (mut top, mut bottom) = (f32::INFINITY, f32::NEG_INFINITY);
-        for (r, is_upper) in ends.iter().flatten() {
+        for (r, is_upper) in ends {
             if *is_upper {
                 if r.open < top {
                     top = r.open;
@@ -356,17 +364,8 @@ impl FringeShader<'_> {
         if bottom > top {
             return [0.0; 3];
         }
-        let share: [f32; 3] = std::array::from_fn(|c| below_hi[c] - below_lo[c]);
-        share.map(|v| factor * v)
+        std::array::from_fn(|c| factor * (below_hi[c] - below_lo[c]))
     }
-}
-
-/// 0 at `edge0`, 1 at `edge1`, smooth (C¹) in between: the feather, as
-/// [`super::render`]'s edge shader has it.
-#[inline]
-fn smooth(edge0: f32, edge1: f32, x: f32) -> f32 {
-    let t = ((x - edge0) / (edge1 - edge0)).clamp(0.0, 1.0);
-    t * t * (3.0 - 2.0 * t)
 }
 
 impl Shader<12> for FringeShader<'_> {
@@ -465,10 +464,7 @@ pub fn mesh_ghost_fringed(
         .collect();
     let per_band = |tri: [usize; 3], mesh: &mut GhostMesh, stats: &mut GhostStats| {
         for emit in &emits {
-            if let Some(flux) = emit.push(tri, mesh) {
-                stats.flux += flux;
-                stats.triangles += 1;
-            }
+            emit.push(tri, mesh, stats);
         }
     };
     // The dispersion coordinate τ (1/λ², in which the geometry is nearly linear) of the

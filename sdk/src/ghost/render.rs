@@ -342,10 +342,7 @@ pub fn mesh_ghost(
         stats.rays += n * n;
         let emit = BandTriangles::new(ctx, bounds, n, light, band, &aperture, grid);
         for tri in grid_triangles(n) {
-            if let Some(flux) = emit.push(tri, mesh) {
-                stats.flux += flux;
-                stats.triangles += 1;
-            }
+            emit.push(tri, mesh, &mut stats);
         }
     }
     stats
@@ -485,9 +482,18 @@ impl<'a> BandTriangles<'a> {
         self.convex && self.aperture.signed_distance(uv[0], uv[1]) <= -0.5 * self.feather
     }
 
-    /// Adds grid triangle `tri` to `mesh` (wholly open, or on an edge); returns its flux, or
-    /// `None` when it adds nothing (a ray stopped, wholly clipped, not finite).
-    pub(crate) fn push(&self, tri: [usize; 3], mesh: &mut GhostMesh) -> Option<f64> {
+    /// Adds grid triangle `tri` to `mesh` (wholly open, or on an edge) and counts it and its
+    /// flux in `stats`; nothing when it adds nothing (a ray stopped, wholly clipped, not
+    /// finite).
+    pub(crate) fn push(&self, tri: [usize; 3], mesh: &mut GhostMesh, stats: &mut GhostStats) {
+        if let Some(flux) = self.triangle(tri, mesh) {
+            stats.flux += flux;
+            stats.triangles += 1;
+        }
+    }
+
+    /// [`BandTriangles::push`] without the counting: the triangle's flux, or `None`.
+    fn triangle(&self, tri: [usize; 3], mesh: &mut GhostMesh) -> Option<f64> {
         let g = self.grid;
         let feather = self.feather;
         if !tri.iter().all(|&k| g.completed[k]) {
@@ -816,7 +822,7 @@ pub const SAMPLED_MIN_AREA: f32 = 16.0;
 pub const EDGE_PIXELS: f64 = 1.0;
 
 /// 0 at `edge0`, 1 at `edge1`, smooth (C¹) in between; works for either order of the edges.
-fn smoothstep(edge0: f32, edge1: f32, x: f32) -> f32 {
+pub(crate) fn smoothstep(edge0: f32, edge1: f32, x: f32) -> f32 {
     let t = ((x - edge0) / (edge1 - edge0)).clamp(0.0, 1.0);
     t * t * (3.0 - 2.0 * t)
 }
