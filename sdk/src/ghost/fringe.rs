@@ -20,9 +20,13 @@
 //! circular stop's `|(u, v)|²` a parabola), each end feathered by a linear ramp as wide as the
 //! feather's smoothstep spreads; the pixel takes its summed irradiance times, per channel, the
 //! share of the ghost's colour that falls in the interval — a lookup in the ghost's cumulative
-//! colour over `τ` ([`FringeTable`]). Where ends overlap, a ramp is wide or the stop is grazed,
-//! the exact smoothsteps are summed over [`CORNER_STEPS`] steps of `τ`. Inside the ghost this
-//! is one shade instead of one per band.
+//! colour over `τ` ([`FringeTable`]). A single end whose ramp spans much of `τ`'s range (a
+//! ghost drawn coarse, its dispersion under a feather) is integrated exactly instead: its
+//! smoothstep of a linear function of `τ` is a cubic in `τ` against the colour's tabulated
+//! partial moments (the stop's radius taken as linear along `τ` where it sags from its chord by
+//! under [`MAX_SAG`] of a feather). Where ends' smoothsteps overlap, several ends are wide or the
+//! stop is grazed, the exact smoothsteps are summed over [`CORNER_STEPS`] steps of `τ`. Inside
+//! the ghost this is one shade instead of one per band.
 //!
 //! A triangle is drawn band by band as before (`BandTriangles::push` in [`super::render`]) where
 //! the model does not hold: a ray of some band stopped, the bands' triangles differ in
@@ -64,6 +68,10 @@ const RAMP_WIDTH: f32 = 0.774_596_7;
 /// Width in `τ` beyond which one end's ramp is summed step by step.
 const WIDE_RAMP: f32 = 0.25;
 
+/// Largest sag (in feathers) of the stop's radius below its chord over `τ ∈ [0, 1]` for which
+/// a wide end of the stop is integrated as linear in `τ`.
+pub const MAX_SAG: f32 = 0.01;
+
 /// Steps over `τ` where the clip's and the stop's ends meet in the range, where the stop is
 /// grazed, or where an end's ramp is wide.
 pub const CORNER_STEPS: usize = 16;
@@ -78,6 +86,10 @@ const NODES: usize = 64;
 pub struct FringeTable {
     /// `[F_r, F_g, F_b, H_r, H_g, H_b]` at node `i` (`τ = i / NODES`).
     nodes: Vec<[f32; 6]>,
+    /// The colour's partial moments `M_k(τ) = ∫₀^τ t^k dF(t)` for `k = 1, 2, 3` at node `i`,
+    /// `[M_1, M_2, M_3]` per channel (`M_0` is `F`): with them a smoothstep of a linear
+    /// function of `τ` integrates exactly against the colour ([`FringeTable::smooth_share`]).
+    moments: Vec<[[f32; 3]; 3]>,
 }
 
 impl FringeTable {
@@ -111,18 +123,28 @@ impl FringeTable {
             acc
         };
         let mut nodes = Vec::with_capacity(NODES + 1);
+        let mut moments = Vec::with_capacity(NODES + 1);
         let mut h = [0.0_f64; 3];
+        let mut m = [[0.0_f64; 3]; 3];
         let mut prev = f(0.0);
         for i in 0..=NODES {
             let t = i as f64 / NODES as f64;
             let fi = f(t);
             if i > 0 {
                 // F is linear between nodes once tabulated: H by the trapezoid rule matches
-                // the lookup's own integral.
+                // the lookup's own integral, and the moments are those of its constant
+                // density on the interval.
+                let t0 = (i - 1) as f64 / NODES as f64;
                 for c in 0..3 {
                     h[c] += 0.5 * (prev[c] + fi[c]) / NODES as f64;
+                    let density = (fi[c] - prev[c]) * NODES as f64;
+                    for (k, mk) in m[c].iter_mut().enumerate() {
+                        let e = k as i32 + 2;
+                        *mk += density * (t.powi(e) - t0.powi(e)) / f64::from(e);
+                    }
                 }
             }
+            moments.push(m.map(|mc| mc.map(|v| v as f32)));
             nodes.push([
                 fi[0] as f32,
                 fi[1] as f32,
@@ -133,7 +155,74 @@ impl FringeTable {
             ]);
             prev = fi;
         }
-        Some(FringeTable { nodes })
+        Some(FringeTable { nodes, moments })
+    }
+
+    /// Per channel, `M_k(τ) = ∫₀^τ t^k dF(t)` for `k = 0..=3` (`τ` clamped to `[0, 1]`), from
+    /// the tabulated density, constant between nodes.
+    #[inline]
+    fn partial_moments(&self, t: f32) -> [[f64; 4]; 3] {
+        let t = f64::from(t.clamp(0.0, 1.0));
+        let x = t * NODES as f64;
+        let i = (x as usize).min(NODES - 1);
+        let t0 = i as f64 / NODES as f64;
+        let (a, b, m) = (&self.nodes[i], &self.nodes[i + 1], &self.moments[i]);
+        // ∫_{t0}^{t} s^k ds for k = 0..=3.
+        let (mut p, mut p0) = (t, t0);
+        let mut powers = [0.0_f64; 4];
+        for (k, v) in powers.iter_mut().enumerate() {
+            *v = (p - p0) / (k + 1) as f64;
+            p *= t;
+            p0 *= t0;
+        }
+        std::array::from_fn(|c| {
+            let density = f64::from(b[c] - a[c]) * NODES as f64;
+            [
+                f64::from(a[c]) + density * powers[0],
+                f64::from(m[c][0]) + density * powers[1],
+                f64::from(m[c][1]) + density * powers[2],
+                f64::from(m[c][2]) + density * powers[3],
+            ]
+        })
+    }
+
+    /// `∫₀¹ S(p + q τ) dF(τ)` per channel, exactly (up to the table's f32 values), where `S` is
+    /// the smoothstep `3t² − 2t³` of `t` clamped to `[0, 1]` and `q ≠ 0`: the cubic against
+    /// the partial moments where `0 < t < 1`, the colour's share where `t ≥ 1`. For ramps
+    /// over much of `τ`'s range (`|q|` up to a few), where the moments' differences are well
+    /// conditioned.
+    fn smooth_share(&self, p: f64, q: f64) -> [f32; 3] {
+        let (zero, one) = ((-p / q).clamp(0.0, 1.0), ((1.0 - p) / q).clamp(0.0, 1.0));
+        // Wholly open where t ≥ 1: above `one` for a rising t, below it for a falling one.
+        let f_one = self.share(one as f32);
+        let mut out: [f64; 3] = std::array::from_fn(|c| {
+            if q > 0.0 {
+                1.0 - f64::from(f_one[c])
+            } else {
+                f64::from(f_one[c])
+            }
+        });
+        let (lo, hi) = (zero.min(one), zero.max(one));
+        if hi > lo {
+            // 3t² − 2t³ with t = p + qτ, as a cubic in τ.
+            let coef = [
+                3.0 * p * p - 2.0 * p * p * p,
+                6.0 * p * q - 6.0 * p * p * q,
+                3.0 * q * q - 6.0 * p * q * q,
+                -2.0 * q * q * q,
+            ];
+            let (ml, mh) = (
+                self.partial_moments(lo as f32),
+                self.partial_moments(hi as f32),
+            );
+            for ((o, h), l) in out.iter_mut().zip(&mh).zip(&ml) {
+                *o += coef[0] * (h[0] - l[0])
+                    + coef[1] * (h[1] - l[1])
+                    + coef[2] * (h[2] - l[2])
+                    + coef[3] * (h[3] - l[3]);
+            }
+        }
+        out.map(|v| v as f32)
     }
 
     /// `F(τ)`, 0 below the range and 1 above it.
@@ -306,15 +395,26 @@ impl FringeShader<'_> {
                 open: 0.0,
             },
             false,
+            false,
         ); 4];
         let mut count = 0;
-        for (r, is_upper) in upper
-            .iter()
-            .flatten()
-            .map(|r| (r, true))
-            .chain(lower.iter().flatten().map(|r| (r, false)))
-        {
-            let (a0, a1) = (r.closed.min(r.open), r.closed.max(r.open));
+        // (ramp, an upper end, the clip's rather than the stop's)
+        let ramps = |ends: [Option<Ramp>; 2], is_upper: bool| {
+            ends.into_iter()
+                .zip([true, false])
+                .filter_map(move |(r, clip)| r.map(|r| (r, is_upper, clip)))
+        };
+        // Over the feather's whole smoothstep, of which the ramp is the narrower stand-in.
+        let span = |r: &Ramp| {
+            let (mid, half) = (
+                0.5 * (r.open + r.closed),
+                0.5 * (r.open - r.closed).abs() / RAMP_WIDTH,
+            );
+            (mid - half, mid + half)
+        };
+        for (r, is_upper, clip) in ramps(upper, true).chain(ramps(lower, false)) {
+            // An end whose smoothstep reaches into the range is active.
+            let (a0, a1) = span(&r);
             if a1 <= 0.0 || a0 >= 1.0 {
                 // Wholly before or after the range: open or closed throughout.
                 let open_throughout = (r.open <= r.closed) == (a0 >= 1.0);
@@ -323,26 +423,51 @@ impl FringeShader<'_> {
                 }
                 continue;
             }
-            active[count] = (*r, is_upper);
+            active[count] = (r, is_upper, clip);
             count += 1;
         }
         let table = &self.tables[a[11] as usize];
         let ends = &active[..count];
-        let span = |r: &Ramp| (r.closed.min(r.open), r.closed.max(r.open));
+
         // A ramp over much of the range (where the colour's spread is uneven under it, the
-        // ramp's shape matters, not only its mean and variance), or ends whose ramps overlap
-        // (a corner of the clip and the stop): step by step.
+        // ramp's shape matters, not only its mean and variance), or ends whose smoothsteps
+        // overlap (a corner of the clip and the stop).
         let wide = ends
             .iter()
-            .any(|(r, _)| (r.open - r.closed).abs() > WIDE_RAMP);
-        let overlap = ends.iter().enumerate().any(|(i, (p, _))| {
-            ends[i + 1..].iter().any(|(q, _)| {
+            .any(|(r, _, _)| (r.open - r.closed).abs() > WIDE_RAMP);
+        let overlap = ends.iter().enumerate().any(|(i, (p, _, _))| {
+            ends[i + 1..].iter().any(|(q, _, _)| {
                 let (a, b) = (span(p), span(q));
                 a.0 < b.1 && b.0 < a.1
             })
         });
-        if wide || overlap {
+        if overlap {
             return self.stepped_share(a, CORNER_STEPS);
+        }
+        if wide {
+            // One wide end whose value is linear in τ (the clip's; the stop's radius where
+            // it is nearly so along τ's segment): its smoothstep integrated exactly against
+            // the colour. Otherwise step by step.
+            let linear = match ends {
+                [(_, _, true)] => Some((r0, r1)),
+                [(_, _, false)] => {
+                    let d = |t: f32| ((u0 + t * u1).powi(2) + (v0 + t * v1).powi(2)).sqrt();
+                    let (d0, d1) = (d(0.0), d(1.0));
+                    // The radius is convex in τ: its sag below the chord, at most where
+                    // the chord is taken for it.
+                    (0.5 * (d0 + d1) - d(0.5) <= MAX_SAG * full).then_some((d0, d1 - d0))
+                }
+                _ => None,
+            };
+            return match linear {
+                Some((x0, x1)) => {
+                    let (f, x0, x1) = (f64::from(full), f64::from(x0), f64::from(x1));
+                    // smoothstep(1 + f/2, 1 − f/2, x0 + τ x1) = S((1 + f/2 − x0)/f − τ x1/f)
+                    let s = table.smooth_share((1.0 + 0.5 * f - x0) / f, -x1 / f);
+                    s.map(|v| factor * v)
+                }
+                None => self.stepped_share(a, CORNER_STEPS),
+            };
         }
         // Apart, each end cuts on its own: the share below the lowest upper end (the mean of
         // F over its ramp) minus that below the highest lower end; nothing where a lower end
@@ -350,7 +475,7 @@ impl FringeShader<'_> {
         let mut below_hi = [1.0_f32; 3];
         let mut below_lo = [0.0_f32; 3];
         let (mut top, mut bottom) = (f32::INFINITY, f32::NEG_INFINITY);
-        for (r, is_upper) in ends {
+        for (r, is_upper, _) in ends {
             if *is_upper {
                 if r.open < top {
                     top = r.open;
@@ -817,7 +942,58 @@ mod tests {
         }
     }
 
+    /// `∫₀¹ S(p + q τ) dF` summed over `steps` steps of `τ`: the oracle of the exact share.
+    fn smooth_share_summed(t: &FringeTable, p: f64, q: f64, steps: usize) -> [f64; 3] {
+        let mut acc = [0.0_f64; 3];
+        let mut prev = t.share(0.0);
+        for i in 0..steps {
+            let next = t.share((i + 1) as f32 / steps as f32);
+            let tau = (i as f64 + 0.5) / steps as f64;
+            let x = (p + q * tau).clamp(0.0, 1.0);
+            let w = x * x * (3.0 - 2.0 * x);
+            for c in 0..3 {
+                acc[c] += w * f64::from(next[c] - prev[c]);
+            }
+            prev = next;
+        }
+        acc
+    }
+
     proptest! {
+        /// A smoothstep of a linear function of τ integrates exactly against the colour:
+        /// as the sum over 20 000 steps of τ, to 1e-4, wherever its ramp falls.
+        #[test]
+        fn a_smoothstep_integrates_exactly_against_the_colour(
+            p in -4.0_f64..5.0, q in prop_oneof![-4.0_f64..-0.05, 0.05_f64..4.0],
+        ) {
+            let t = table();
+            let exact = t.smooth_share(p, q);
+            let summed = smooth_share_summed(&t, p, q, 20_000);
+            for c in 0..3 {
+                prop_assert!(
+                    (f64::from(exact[c]) - summed[c]).abs() < 1e-4,
+                    "channel {}: {:?} against {:?}", c, exact, summed
+                );
+            }
+        }
+
+        /// A wide end of the clip alone (its ramp over more than a quarter of τ's range) is
+        /// integrated exactly: the shade's share is the 4096-step sum's within 1e-3.
+        #[test]
+        fn a_wide_clip_end_is_exact(
+            r0 in 0.9_f32..1.1, r1 in 0.001_f32..0.02, sign in prop::bool::ANY,
+            f in 0.02_f32..0.05,
+        ) {
+            let tables = [table()];
+            let shader = FringeShader { tables: &tables };
+            let r1 = if sign { r1 } else { -r1 };
+            let a = attrs([1.0; 3], [r0, r1], [0.0; 2], [0.0; 2], f, false);
+            let (s, q) = (shader.open_share(&a), shader.stepped_share(&a, 4096));
+            for c in 0..3 {
+                prop_assert!((s[c] - q[c]).abs() < 1e-3, "channel {}: {:?} against {:?}", c, s, q);
+            }
+        }
+
         /// The analytic share against quadrature over τ with the feather's smoothstep and
         /// the stop's exact radius: the same within a few per cent of the whole colour (the
         /// ramps are linear and the clip's and the stop's ends are taken one at a time).
