@@ -20,6 +20,8 @@ use crate::aperture::{Aperture, ApertureSampler};
 use crate::image::{CoarseGrid, HdrImage};
 use crate::raster::{Coverage, RowSplit, Shader, rasterize_into, rasterize_shaded_into};
 use crate::system::LensSystem;
+use std::sync::Arc;
+
 use crate::trace::{InterfaceTableSet, Sequence};
 
 use super::bounds::GhostBounds;
@@ -75,8 +77,9 @@ pub struct Band {
     pub lambda_nm: f64,
     /// Linear-sRGB weight of the band (for a light of unit irradiance).
     pub rgb: [f32; 3],
-    /// The lens's interface tables at `lambda_nm`.
-    pub tables: InterfaceTableSet,
+    /// The lens's interface tables at `lambda_nm` (shared: a lens's tables at a wavelength
+    /// serve every frame's plan).
+    pub tables: Arc<InterfaceTableSet>,
 }
 
 impl Band {
@@ -85,7 +88,7 @@ impl Band {
         Band {
             lambda_nm,
             rgb,
-            tables: InterfaceTableSet::for_system(system, lambda_nm),
+            tables: Arc::new(InterfaceTableSet::for_system(system, lambda_nm)),
         }
     }
 
