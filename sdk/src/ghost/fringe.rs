@@ -297,22 +297,44 @@ impl FringeShader<'_> {
     /// feather's own smoothstep of the clip radius and (where flagged) of the stop's exact
     /// radius, times the step's share of the colour. With many steps, the tests' oracle.
     fn stepped_share(&self, a: &FringeAttrs, steps: usize) -> [f32; 3] {
+        self.stepped_between(a, steps, 0.0, 1.0)
+    }
+
+    /// [`FringeShader::stepped_share`] with the steps over `[lo, hi]` (within `[0, 1]`)
+    /// only: every end's smoothstep is constant below and above it, so each of those parts
+    /// takes its colour share at one weight.
+    fn stepped_between(&self, a: &FringeAttrs, steps: usize, lo: f32, hi: f32) -> [f32; 3] {
         let f = a[9];
         let table = &self.tables[a[11] as usize];
-        let mut acc = [0.0_f32; 3];
-        let mut prev = [0.0_f32; 3];
-        for i in 0..steps {
-            let next = table.share((i + 1) as f32 / steps as f32);
-            let t = (i as f32 + 0.5) / steps as f32;
+        let weight = |t: f32| {
             let mut w = smoothstep(1.0 + 0.5 * f, 1.0 - 0.5 * f, a[3] + t * a[4]);
             if a[10] > 0.5 {
                 let (u, v) = (a[5] + t * a[6], a[7] + t * a[8]);
                 w *= smoothstep(1.0 + 0.5 * f, 1.0 - 0.5 * f, (u * u + v * v).sqrt());
             }
+            w
+        };
+        let mut prev = table.share(lo);
+        let mut acc = if lo > 0.0 {
+            let w = weight(0.5 * lo);
+            prev.map(|p| w * p)
+        } else {
+            [0.0_f32; 3]
+        };
+        let width = (hi - lo) / steps as f32;
+        for i in 0..steps {
+            let next = table.share(lo + (i + 1) as f32 * width);
+            let w = weight(lo + (i as f32 + 0.5) * width);
             for c in 0..3 {
                 acc[c] += w * (next[c] - prev[c]);
             }
             prev = next;
+        }
+        if hi < 1.0 {
+            let w = weight(0.5 * (hi + 1.0));
+            for c in 0..3 {
+                acc[c] += w * (1.0 - prev[c]);
+            }
         }
         acc
     }
@@ -442,7 +464,12 @@ impl FringeShader<'_> {
             })
         });
         if overlap {
-            return self.stepped_share(a, CORNER_STEPS);
+            // Steps over where the ends' smoothsteps are, not the whole range.
+            let (lo, hi) = ends.iter().fold((1.0_f32, 0.0_f32), |(lo, hi), (r, _, _)| {
+                let (a0, a1) = span(r);
+                (lo.min(a0), hi.max(a1))
+            });
+            return self.stepped_between(a, CORNER_STEPS, lo.max(0.0), hi.min(1.0));
         }
         if wide {
             // One wide end whose value is linear in τ (the clip's; the stop's radius where
@@ -518,6 +545,28 @@ impl Shader<12> for FringeShader<'_> {
             (false, true) => lit0,
             (false, false) => lit0.start.min(lit1.start)..lit0.end.max(lit1.end),
         };
+        let mut lit = lit;
+        if a[10] > 0.5 && !lit.is_empty() {
+            // Dark where τ's whole segment of the stop crossing is beyond the stop's outer
+            // feather: its middle farther than that plus its half-length (at most the larger
+            // of the row's ends', the length being convex along the row).
+            let (mu, mv) = (
+                f64::from(a[5]) + 0.5 * f64::from(a[6]),
+                f64::from(a[7]) + 0.5 * f64::from(a[8]),
+            );
+            let (dmu, dmv) = (
+                f64::from(step[5]) + 0.5 * f64::from(step[6]),
+                f64::from(step[7]) + 0.5 * f64::from(step[8]),
+            );
+            let last = n.saturating_sub(1) as f64;
+            let half = |u1: f64, v1: f64| 0.5 * (u1 * u1 + v1 * v1).sqrt();
+            let reach = half(f64::from(a[6]), f64::from(a[8])).max(half(
+                f64::from(a[6]) + last * f64::from(step[6]),
+                f64::from(a[8]) + last * f64::from(step[8]),
+            ));
+            let (within, _) = parabola_split(mu, mv, dmu, dmv, [bounds[0] + reach, 0.0], n);
+            lit = intersect(lit, within);
+        }
         let mut core = core0.start.max(core1.start)..core0.end.min(core1.end);
         if a[10] > 0.5 && !core.is_empty() {
             // The stop, where both ends of τ's segment are inside it (the disc is convex):
@@ -1021,18 +1070,20 @@ mod tests {
             rgb in prop::array::uniform3(0.1_f32..10.0),
             r0 in 0.8_f32..1.2, r1 in -0.1_f32..0.1, dr0 in -0.02_f32..0.02, dr1 in -0.01_f32..0.01,
             u0 in -1.1_f32..1.1, v0 in -1.1_f32..1.1,
+            u1 in -0.1_f32..0.1, v1 in -0.1_f32..0.1,
+            stop_step in prop::array::uniform4(-0.02_f32..0.02),
             f in 1e-4_f32..0.05,
             flag in prop::bool::ANY,
             n in 1_usize..64,
         ) {
             let tables = [table()];
             let shader = FringeShader { tables: &tables };
-            let a = attrs(rgb, [r0, r1], [u0, 0.02], [v0, -0.01], f, flag);
+            let a = attrs(rgb, [r0, r1], [u0, u1], [v0, v1], f, flag);
             let mut step = [0.0_f32; 12];
             step[0] = 0.01;
             step[3] = dr0;
             step[4] = dr1;
-            step[5] = 0.01;
+            step[5..9].copy_from_slice(&stop_step);
             let split = shader.split_row(&a, &step, n);
             prop_assert!(split.lit.end <= n && split.core.end <= n);
             let mut x = a;
