@@ -528,9 +528,10 @@ impl Shader<12> for FringeShader<'_> {
     }
 
     /// The clip radius over `τ ∈ [0, 1]` lies between `r0` and `r0 + r1`, both affine along the
-    /// row: the pixels where both are beyond the outer feather are dark, those where both are
-    /// within the inner one (and, where the stop is flagged, both ends of the stop crossing's
-    /// segment inside the stop's inner feather) wholly open.
+    /// row: the pixels where both are beyond the outer feather are dark — and, where the stop
+    /// is flagged, those where the stop crossing's whole segment over τ is beyond the stop's
+    /// outer feather — and those where both are within the inner one (and, where the stop is
+    /// flagged, both ends of the segment inside the stop's inner feather) wholly open.
     fn split_row(&self, a: &FringeAttrs, step: &FringeAttrs, n: usize) -> RowSplit {
         let f = f64::from(a[9]);
         let bounds = [1.0 + 0.5 * f + SPLIT_MARGIN, 1.0 - 0.5 * f - SPLIT_MARGIN];
