@@ -454,6 +454,11 @@ impl LensTables {
     /// First and last wavelengths tabulated (nm): every band centre lies between them.
     const RANGE_NM: [f64; 2] = [380.0, 780.0];
 
+    /// Most bands whose tables are kept: twice the 496 centres of every sampling of 1 to 31
+    /// bins (a plan asked for more bands computes the rest each time rather than holding
+    /// tables without bound).
+    const MAX_HELD_BANDS: usize = 1024;
+
     /// The tables of `system` (built in parallel).
     pub fn new(system: &LensSystem) -> Self {
         let [lo, hi] = Self::RANGE_NM;
@@ -477,6 +482,9 @@ impl LensTables {
         let t = Arc::new(InterfaceTableSet::between(&self.system, lambda_nm, a, b));
         // Built outside the lock; another thread building the same band builds the same.
         let mut held = self.bands.lock().ok()?;
+        if held.len() >= Self::MAX_HELD_BANDS {
+            return Some(t);
+        }
         Some(Arc::clone(held.entry(key).or_insert(t)))
     }
 
@@ -737,6 +745,39 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// The lens's tables hold at most `MAX_HELD_BANDS` bands; past that a band's tables are
+    /// still given (the same as a held band's would be), just not kept.
+    #[test]
+    fn lens_tables_hold_a_bounded_number_of_bands() {
+        let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../lenses/heliar-tronnier.xml");
+        let sys = flarebench_sdk::io::read_lens(&p).unwrap().system;
+        let lens = LensTables::new(&sys);
+        let extra = 8;
+        let count = LensTables::MAX_HELD_BANDS + extra;
+        let lambda = |i: usize| 400.0 + 300.0 * i as f64 / count as f64;
+        let given: Vec<Arc<InterfaceTableSet>> =
+            (0..count).map(|i| lens.band(lambda(i)).unwrap()).collect();
+        assert_eq!(lens.bands.lock().unwrap().len(), LensTables::MAX_HELD_BANDS);
+        // A held band is shared; one past the cap is built anew each time, with equal tables.
+        assert!(Arc::ptr_eq(&given[0], &lens.band(lambda(0)).unwrap()));
+        let last = count - 1;
+        let again = lens.band(lambda(last)).unwrap();
+        assert!(!Arc::ptr_eq(&given[last], &again));
+        use flarebench_sdk::trace::Interaction::Reflect;
+        for s in 0..sys.surfaces.len() {
+            for forward in [true, false] {
+                let (x, y) = (
+                    given[last].get(s, forward, Reflect),
+                    again.get(s, forward, Reflect),
+                );
+                assert_eq!(x.map(|t| t.values), y.map(|t| t.values), "surface {s}");
+            }
+        }
+        // Outside the tabulated range: none.
+        assert!(lens.band(300.0).is_none());
     }
 
     #[test]
