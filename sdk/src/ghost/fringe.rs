@@ -692,7 +692,26 @@ pub fn mesh_ghost_fringed(
     let (o0, e0, f0) = (mesh.open.len(), mesh.edge.len(), mesh.fringe.len());
     let mut failed = 0_usize;
     let mut areas = vec![0.0_f64; m];
-    let mut values: Vec<[[f64; 3]; 3]> = vec![[[0.0_f64; 3]; 3]; m];
+    // Per band `b` and corner `c` of the mean triangle: the clip radius and stop crossing
+    // `[r, u, v]` at `values[b][3 c..3 c + 3]`.
+    let mut values: Vec<[f64; 9]> = vec![[0.0_f64; 9]; m];
+    // Each band's vertices as the triangles read them (every vertex is shared by up to six
+    // triangles): sensor position (mm, the lens's frame) and `[r, u, v]`.
+    let vertices = n * n;
+    let mut sensor = Vec::with_capacity(m * vertices);
+    let mut radius_uv = Vec::with_capacity(m * vertices);
+    for e in &emits {
+        for k in 0..vertices {
+            sensor.push(e.sensor(k));
+            let uv = e.stop_uv(k);
+            radius_uv.push([
+                f64::from(e.grid.max_rel[k]),
+                f64::from(uv[0]),
+                f64::from(uv[1]),
+            ]);
+        }
+    }
+    let corners = |b: usize, tri: [usize; 3]| tri.map(|k| sensor[b * vertices + k]);
     for tri in grid_triangles(n) {
         let all_done = emits
             .iter()
@@ -713,8 +732,8 @@ pub fn mesh_ghost_fringed(
         let (mut smallest, mut largest) = (f64::INFINITY, 0.0_f64);
         let mut sign = 0.0_f64;
         let mut consistent = true;
-        for (e, area) in emits.iter().zip(areas.iter_mut()) {
-            let p = tri.map(|k| e.sensor(k));
+        for (b, area) in areas.iter_mut().enumerate() {
+            let p = corners(b, tri);
             let a2 = cross(sub(p[1], p[0]), sub(p[2], p[0]));
             *area = 0.5 * a2.abs();
             if sign == 0.0 {
@@ -740,33 +759,27 @@ pub fn mesh_ghost_fringed(
             continue;
         }
         // Each band's clip radius and stop crossing, extended affinely to the mean corners.
-        for (e, vals) in emits.iter().zip(values.iter_mut()) {
-            let p = tri.map(|k| e.sensor(k));
+        for (b, vals) in values.iter_mut().enumerate() {
+            let p = corners(b, tri);
             let (e1, e2) = (sub(p[1], p[0]), sub(p[2], p[0]));
             let inv = 1.0 / cross(e1, e2);
-            let at = tri.map(|k| {
-                let uv = e.stop_uv(k);
-                [
-                    f64::from(e.grid.max_rel[k]),
-                    f64::from(uv[0]),
-                    f64::from(uv[1]),
-                ]
-            });
+            let at = tri.map(|k| radius_uv[b * vertices + k]);
             for (c, q) in mean.iter().enumerate() {
                 let d = sub(*q, p[0]);
                 let (w1, w2) = (cross(d, e2) * inv, cross(e1, d) * inv);
-                vals[c] = std::array::from_fn(|x| {
-                    at[0][x] + w1 * (at[1][x] - at[0][x]) + w2 * (at[2][x] - at[0][x])
-                });
+                for x in 0..3 {
+                    vals[3 * c + x] =
+                        at[0][x] + w1 * (at[1][x] - at[0][x]) + w2 * (at[2][x] - at[0][x]);
+                }
             }
         }
+        let (fits, residuals) = model.fit_all(&values);
         let mut lines = [[[0.0_f64; 2]; 3]; 3];
         let mut residual = [0.0_f64; 3];
         for (c, line) in lines.iter_mut().enumerate() {
             for (x, l) in line.iter_mut().enumerate() {
-                let (fit, r) = model.fit(values.iter().map(|v| v[c][x]));
-                *l = fit;
-                residual[x] = residual[x].max(r);
+                *l = fits[3 * c + x];
+                residual[x] = residual[x].max(residuals[3 * c + x]);
             }
         }
         // Open when, at both ends of τ, every corner is within the clip and the (convex)
@@ -867,25 +880,45 @@ impl<'a> LineFit<'a> {
         LineFit { x, mean, sxx }
     }
 
-    /// `[intercept, slope]` of the line through `y` (one value per abscissa) and the largest
-    /// distance of a value from it.
-    fn fit(&self, y: impl Iterator<Item = f64> + Clone) -> ([f64; 2], f64) {
-        let ym = y.clone().sum::<f64>() / self.x.len() as f64;
-        let sxy: f64 = self
-            .x
-            .iter()
-            .zip(y.clone())
-            .map(|(x, y)| (x - self.mean) * (y - ym))
-            .sum();
-        let slope = if self.sxx > 0.0 { sxy / self.sxx } else { 0.0 };
-        let intercept = ym - slope * self.mean;
-        let residual = self
-            .x
-            .iter()
-            .zip(y)
-            .map(|(x, y)| (y - intercept - slope * x).abs())
-            .fold(0.0, f64::max);
-        ([intercept, slope], residual)
+    /// For each of `K` series (`ys[b][i]` is series `i`'s value at abscissa `b`): the
+    /// `[intercept, slope]` of its least-squares line and the largest distance of a value
+    /// from it. One pass over the abscissae per sum, every series at once.
+    fn fit_all<const K: usize>(&self, ys: &[[f64; K]]) -> ([[f64; 2]; K], [f64; K]) {
+        let count = self.x.len() as f64;
+        // Sums start at −0, as `Iterator::sum` does.
+        let mut ym = [-0.0_f64; K];
+        for y in ys {
+            for (s, v) in ym.iter_mut().zip(y) {
+                *s += v;
+            }
+        }
+        for s in &mut ym {
+            *s /= count;
+        }
+        let mut sxy = [-0.0_f64; K];
+        for (x, y) in self.x.iter().zip(ys) {
+            let dx = x - self.mean;
+            for i in 0..K {
+                sxy[i] += dx * (y[i] - ym[i]);
+            }
+        }
+        let mut lines = [[0.0_f64; 2]; K];
+        for (i, line) in lines.iter_mut().enumerate() {
+            let slope = if self.sxx > 0.0 {
+                sxy[i] / self.sxx
+            } else {
+                0.0
+            };
+            *line = [ym[i] - slope * self.mean, slope];
+        }
+        let mut residual = [0.0_f64; K];
+        for (x, y) in self.x.iter().zip(ys) {
+            for i in 0..K {
+                let [intercept, slope] = lines[i];
+                residual[i] = residual[i].max((y[i] - intercept - slope * x).abs());
+            }
+        }
+        (lines, residual)
     }
 }
 
