@@ -191,8 +191,8 @@ pub struct PlanOptions<'a> {
     /// ([`LensTables::new`]; a plugin does it when the lens is prepared): the plan then
     /// interpolates between them instead of building them, and keeps each band's tables for
     /// the next plans. Tables of another lens are ignored. The plan is the same with or
-    /// without them, except that with them a plan of fewer bands than tables every
-    /// [`TABLE_STEP_NM`] interpolates too (within 2e-4 of exact) instead of building exactly.
+    /// without them, bit for bit: a plan of fewer bands than tables every [`TABLE_STEP_NM`]
+    /// builds each band's tables exactly either way (and the lens keeps those too).
     pub lens_tables: Option<&'a LensTables>,
 }
 
@@ -440,14 +440,15 @@ pub const TABLE_STEP_NM: f64 = 10.0;
 
 /// A lens's interface tables every [`TABLE_STEP_NM`] over 380–780 nm: what a plan
 /// interpolates its bands' tables between ([`PlanOptions::lens_tables`]); and the tables of
-/// every band a plan has interpolated so far, kept for the next frames' plans (a ghost's
-/// bands are the centres of `m` equal bins, so a lens's frames use a few hundred at most).
+/// every band a plan has needed so far, interpolated or (for a plan of few bands) exact, kept
+/// for the next frames' plans (a ghost's bands are the centres of `m` equal bins, so a lens's
+/// frames use a few hundred at most).
 #[derive(Debug)]
 pub struct LensTables {
     system: LensSystem,
     nodes: Vec<InterfaceTableSet>,
-    /// Band tables by their wavelength's bits.
-    bands: Mutex<HashMap<u64, Arc<InterfaceTableSet>>>,
+    /// Band tables by their wavelength's bits and whether they are exact.
+    bands: Mutex<HashMap<(u64, bool), Arc<InterfaceTableSet>>>,
 }
 
 impl LensTables {
@@ -470,16 +471,21 @@ impl LensTables {
         }
     }
 
-    /// The tables at `lambda_nm` between the two held around it, interpolated once and kept;
+    /// The tables at `lambda_nm`, built once and kept: with `exact`, built at that wavelength
+    /// (`InterfaceTableSet::for_system`), else interpolated between the two held around it.
     /// `None` outside the held range.
-    fn band(&self, lambda_nm: f64) -> Option<Arc<InterfaceTableSet>> {
-        let key = lambda_nm.to_bits();
+    fn band(&self, lambda_nm: f64, exact: bool) -> Option<Arc<InterfaceTableSet>> {
+        let key = (lambda_nm.to_bits(), exact);
         if let Some(t) = self.bands.lock().ok()?.get(&key) {
             return Some(Arc::clone(t));
         }
         let i = bracket(lambda_nm, Self::RANGE_NM[0] / TABLE_STEP_NM)?;
         let (a, b) = (self.nodes.get(i)?, self.nodes.get(i + 1)?);
-        let t = Arc::new(InterfaceTableSet::between(&self.system, lambda_nm, a, b));
+        let t = Arc::new(if exact {
+            InterfaceTableSet::for_system(&self.system, lambda_nm)
+        } else {
+            InterfaceTableSet::between(&self.system, lambda_nm, a, b)
+        });
         // Built outside the lock; another thread building the same band builds the same.
         let mut held = self.bands.lock().ok()?;
         if held.len() >= Self::MAX_HELD_BANDS {
@@ -504,23 +510,30 @@ fn tables_every_step(system: &LensSystem, first_nm: f64, count: usize) -> Vec<In
 }
 
 /// Each bin's band (its centre wavelength and interface tables; colour zero): with `exact`
-/// (the reference), tables built at every centre; with `lens` (this system's), its tables
-/// between those every [`TABLE_STEP_NM`], interpolated once per lens and wavelength
-/// ([`LensTables`]); otherwise, when there are no more bins than tables every
-/// [`TABLE_STEP_NM`] over their range, built at every centre, and else interpolated between
-/// those (`InterfaceTableSet::between`, from the table at or below the centre and the next).
-/// Built in parallel.
+/// (the reference), tables built at every centre; otherwise, when there are no more bins
+/// than tables every [`TABLE_STEP_NM`] over their range, built at every centre, and else
+/// interpolated between those (`InterfaceTableSet::between`, from the table at or below the
+/// centre and the next). With `lens` (this system's; not for the reference), the same tables
+/// come from it, built once per lens and wavelength ([`LensTables`]). Built in parallel.
 fn band_tables(
     system: &LensSystem,
     bins: &[Bin],
     exact: bool,
     lens: Option<&LensTables>,
 ) -> Vec<Band> {
+    let (lo, hi) = bins.iter().fold((f64::INFINITY, 0.0_f64), |(lo, hi), b| {
+        (lo.min(b.centre_nm), hi.max(b.centre_nm))
+    });
+    let first = (lo / TABLE_STEP_NM).floor();
+    // Every centre between the tables at its own step and the next.
+    let count = ((hi / TABLE_STEP_NM).floor() - first).max(0.0) as usize + 2;
+    // Fewer bands than tables to interpolate between: each built exactly, for less.
+    let each_exact = bins.len() <= count;
     if !exact && let Some(lens) = lens.filter(|l| l.is_for(system)) {
         let held: Option<Vec<Band>> = bins
             .par_iter()
             .map(|b| {
-                lens.band(b.centre_nm).map(|tables| Band {
+                lens.band(b.centre_nm, each_exact).map(|tables| Band {
                     lambda_nm: b.centre_nm,
                     rgb: [0.0; 3],
                     tables,
@@ -531,14 +544,7 @@ fn band_tables(
             return bands;
         }
     }
-    let (lo, hi) = bins.iter().fold((f64::INFINITY, 0.0_f64), |(lo, hi), b| {
-        (lo.min(b.centre_nm), hi.max(b.centre_nm))
-    });
-    let first = (lo / TABLE_STEP_NM).floor();
-    // Every centre between the tables at its own step and the next.
-    let count = ((hi / TABLE_STEP_NM).floor() - first).max(0.0) as usize + 2;
-    // Fewer bands than tables to interpolate between: each built exactly, for less.
-    if exact || bins.len() <= count {
+    if exact || each_exact {
         return bins
             .par_iter()
             .map(|b| Band::new(system, b.centre_nm, [0.0; 3]))
@@ -729,7 +735,28 @@ mod tests {
         for (a, b) in first.bands.iter().zip(&second.bands) {
             assert!(Arc::ptr_eq(&a.tables, &b.tables));
         }
-        for with in [first, plan_with(Some(&theirs))] {
+        // A plan of few bands (the fast preset's 7) builds each exactly, with the lens's
+        // tables too: the images do not depend on whether the lens was prepared.
+        let fast = PlanOptions::for_quality(Quality::Fast, None);
+        let fast_with = |lens_tables| {
+            plan(
+                &sys,
+                &lights,
+                &f,
+                &PlanOptions {
+                    lens_tables,
+                    ..fast
+                },
+            )
+            .unwrap()
+            .remove(0)
+        };
+        let pairs = [
+            (first, without),
+            (plan_with(Some(&theirs)), plan_with(None)),
+            (fast_with(Some(&mine)), fast_with(None)),
+        ];
+        for (with, without) in pairs {
             assert_eq!(with.bands.len(), without.bands.len());
             for (a, b) in with.bands.iter().zip(&without.bands) {
                 assert_eq!(a.lambda_nm, b.lambda_nm);
@@ -758,13 +785,17 @@ mod tests {
         let extra = 8;
         let count = LensTables::MAX_HELD_BANDS + extra;
         let lambda = |i: usize| 400.0 + 300.0 * i as f64 / count as f64;
-        let given: Vec<Arc<InterfaceTableSet>> =
-            (0..count).map(|i| lens.band(lambda(i)).unwrap()).collect();
+        let given: Vec<Arc<InterfaceTableSet>> = (0..count)
+            .map(|i| lens.band(lambda(i), false).unwrap())
+            .collect();
         assert_eq!(lens.bands.lock().unwrap().len(), LensTables::MAX_HELD_BANDS);
         // A held band is shared; one past the cap is built anew each time, with equal tables.
-        assert!(Arc::ptr_eq(&given[0], &lens.band(lambda(0)).unwrap()));
+        assert!(Arc::ptr_eq(
+            &given[0],
+            &lens.band(lambda(0), false).unwrap()
+        ));
         let last = count - 1;
-        let again = lens.band(lambda(last)).unwrap();
+        let again = lens.band(lambda(last), false).unwrap();
         assert!(!Arc::ptr_eq(&given[last], &again));
         use flarebench_sdk::trace::Interaction::Reflect;
         for s in 0..sys.surfaces.len() {
@@ -777,7 +808,7 @@ mod tests {
             }
         }
         // Outside the tabulated range: none.
-        assert!(lens.band(300.0).is_none());
+        assert!(lens.band(300.0, false).is_none() && lens.band(300.0, true).is_none());
     }
 
     #[test]
