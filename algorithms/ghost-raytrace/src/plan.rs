@@ -713,20 +713,20 @@ mod tests {
         let mine = LensTables::new(&sys);
         let theirs = LensTables::new(&other);
         assert!(mine.is_for(&sys) && !theirs.is_for(&sys));
-        let base = PlanOptions::for_quality(Quality::Default, None);
-        let plan_with = |lens_tables| {
+        let plan_of = |quality: Quality, lens_tables: Option<&LensTables>| {
             plan(
                 &sys,
                 &lights,
                 &f,
                 &PlanOptions {
                     lens_tables,
-                    ..base
+                    ..PlanOptions::for_quality(quality, None)
                 },
             )
             .unwrap()
             .remove(0)
         };
+        let plan_with = |lens_tables| plan_of(Quality::Default, lens_tables);
         let without = plan_with(None);
         // Enough distinct bands that the plan interpolates between tables.
         assert!(without.bands.len() > 42, "{} bands", without.bands.len());
@@ -737,20 +737,7 @@ mod tests {
         }
         // A plan of few bands (the fast preset's 7) builds each exactly, with the lens's
         // tables too: the images do not depend on whether the lens was prepared.
-        let fast = PlanOptions::for_quality(Quality::Fast, None);
-        let fast_with = |lens_tables| {
-            plan(
-                &sys,
-                &lights,
-                &f,
-                &PlanOptions {
-                    lens_tables,
-                    ..fast
-                },
-            )
-            .unwrap()
-            .remove(0)
-        };
+        let fast_with = |lens_tables| plan_of(Quality::Fast, lens_tables);
         let pairs = [
             (first, without),
             (plan_with(Some(&theirs)), plan_with(None)),
