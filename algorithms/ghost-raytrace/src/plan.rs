@@ -168,7 +168,15 @@ pub struct FourReflectionSummary {
 #[derive(Clone, Copy, Debug)]
 pub struct PlanOptions<'a> {
     pub quality: Quality,
+    /// The most bands a ghost is traced at (and the light's own spectral sampling).
     pub bands: usize,
+    /// The fewest bands a ghost is traced at, however small its dispersion (1 for the
+    /// presets; the reference's `REFERENCE_MIN_BANDS`).
+    pub min_bands: usize,
+    /// Neighbouring bands of a ghost move it by at most this many drawn pixels (paraxially):
+    /// a ghost takes the fewest bands that keep them so, between `min_bands` and `bands`
+    /// ([`BAND_SPACING_PX`] for the presets; the reference an eighth of a pixel).
+    pub band_spacing_px: f64,
     /// False keeps every ghost that has light (the reference renderer).
     pub cull: bool,
     /// Multiplies each ghost's grid.
@@ -178,8 +186,9 @@ pub struct PlanOptions<'a> {
     /// ghost the table does not hold has its bounds traced ([`LightPlan::not_in_table`]); a
     /// light outside the table's angles is an error.
     pub precomputed: Option<&'a BoundsTable>,
-    /// Trace every band of every ghost, however small its dispersion (the reference).
-    pub all_bands: bool,
+    /// Build every band's interface tables at its own wavelength (the reference), rather than
+    /// interpolate them between tables every [`TABLE_STEP_NM`].
+    pub exact_tables: bool,
     /// Largest coarse-frame factor a ghost may be drawn at (1: every ghost at full
     /// resolution, as the reference does).
     pub max_downscale: usize,
@@ -202,10 +211,12 @@ impl<'a> PlanOptions<'a> {
         PlanOptions {
             quality,
             bands: quality.bands(),
+            min_bands: 1,
+            band_spacing_px: BAND_SPACING_PX,
             cull: true,
             grid_scale: quality.grid_scale(),
             precomputed,
-            all_bands: false,
+            exact_tables: false,
             max_downscale: MAX_DOWNSCALE,
             reflections: ReflectionOrder::Two,
             lens_tables: None,
@@ -223,10 +234,12 @@ pub fn plan(
     let PlanOptions {
         quality,
         bands,
+        min_bands,
+        band_spacing_px,
         cull,
         grid_scale,
         precomputed,
-        all_bands,
+        exact_tables,
         max_downscale,
         reflections,
         lens_tables,
@@ -378,17 +391,16 @@ pub fn plan(
                     max_downscale,
                     quality.coarse_pixels_per_radius(),
                 );
-                // Enough bands that neighbouring ones move the ghost by at most half a drawn
-                // pixel: m bands over a dispersion of D drawn pixels step D/(m − 1).
-                let groups = if all_bands {
-                    bands
-                } else {
+                // Enough bands that neighbouring ones move the ghost by at most the spacing:
+                // m bands over a dispersion of D drawn pixels step D/(m − 1).
+                let groups = {
                     let d = dispersion_px(system, path, theta, lo, hi, frame) / downscale as f64;
-                    if d.is_finite() {
-                        ((2.0 * d).ceil() as usize + 1).min(bands)
+                    let m = if d.is_finite() {
+                        ((d / band_spacing_px).ceil() as usize).saturating_add(1)
                     } else {
                         bands
-                    }
+                    };
+                    m.min(bands).max(min_bands.min(bands)).max(1)
                 };
                 // The ghost's own sampling: `groups` equal bins, each traced at its centre
                 // in the colour of its whole bin. (Grouping the light's bands unevenly
@@ -417,7 +429,7 @@ pub fn plan(
             dropped.extend(bounded_out);
             Ok(LightPlan {
                 light: light.clone(),
-                bands: band_tables(system, &bins, all_bands, lens_tables),
+                bands: band_tables(system, &bins, exact_tables, lens_tables),
                 sampled: bands,
                 ghosts,
                 dropped,
@@ -427,6 +439,10 @@ pub fn plan(
         })
         .collect()
 }
+
+/// Drawn pixels by which neighbouring bands of a ghost may move it (paraxially), for the
+/// presets: at half a pixel the copies blend under the one-pixel feather of its edge.
+pub const BAND_SPACING_PX: f64 = 0.5;
 
 /// Wavelength step (nm) of the interface tables a plan builds exactly: a band between two
 /// of them takes their interpolation (`InterfaceTableSet::between`: linear, with the entries
