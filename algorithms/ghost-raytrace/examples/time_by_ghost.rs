@@ -40,7 +40,7 @@ fn main() {
         eprintln!("usage: time_by_ghost LENS THETA,PHI WxH QUALITY [RUNS]");
         std::process::exit(2);
     };
-    let runs: usize = rest.first().map_or(5, |r| r.parse().expect("runs"));
+    let runs: usize = rest.first().map_or(5, |r| r.parse().expect("runs")).max(1);
     let sys = read_lens(Path::new(lens)).expect("lens").system;
     let light = LightSpec::parse(light).expect("light");
     let (w, h) = size.split_once('x').expect("WxH");

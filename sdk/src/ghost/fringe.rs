@@ -301,8 +301,10 @@ impl FringeShader<'_> {
     }
 
     /// [`FringeShader::stepped_share`] with the steps over `[lo, hi]` (within `[0, 1]`)
-    /// only: every end's smoothstep is constant below and above it, so each of those parts
-    /// takes its colour share at one weight.
+    /// only: each part below and above it takes its colour share at one weight, that of its
+    /// side's end. The clip's smoothstep is constant there exactly; the stop's only nearly
+    /// (its span is its ramp's straight extension, while its radius is convex in `τ`: at a
+    /// stop grazed by half a feather, about 1% of that part's colour).
     fn stepped_between(&self, a: &FringeAttrs, steps: usize, lo: f32, hi: f32) -> [f32; 3] {
         let f = a[9];
         let table = &self.tables[a[11] as usize];
@@ -480,9 +482,9 @@ impl FringeShader<'_> {
                 [(_, _, false)] => {
                     let d = |t: f32| ((u0 + t * u1).powi(2) + (v0 + t * v1).powi(2)).sqrt();
                     let (d0, d1) = (d(0.0), d(1.0));
-                    // The radius is convex in τ: its sag below the chord, at most where
-                    // the chord is taken for it.
-                    (0.5 * (d0 + d1) - d(0.5) <= MAX_SAG * full).then_some((d0, d1 - d0))
+                    // The radius is convex in τ, so its sag below the chord is concave and
+                    // zero at both ends: at most twice the sag at the middle.
+                    (d0 + d1 - 2.0 * d(0.5) <= MAX_SAG * full).then_some((d0, d1 - d0))
                 }
                 _ => None,
             };
