@@ -197,7 +197,7 @@ mod tests {
         // Each of 31 bins (12.9 nm) holds its share of the light's colour: against a 0.1 nm
         // sampling of the same light, within 2% of the brightest bin. (Counting 5 nm cells
         // whole by their centres gave two or three cells a bin: errors of 20–40%.)
-        let fine = flarebench_sdk::color::SpectralSampling::new(4000, LightSpectrum::D65).unwrap();
+        let fine = SpectralSampling::new(4000, LightSpectrum::D65).unwrap();
         let y = |c: [f32; 3]| 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
         let truth: Vec<f32> = (0..31)
             .map(|i| {
