@@ -161,13 +161,9 @@ mod tests {
     use super::*;
     use flarebench_sdk::{Coating, Medium, Surface};
 
-    /// A bin's colour is the sum of its halves' (and of its thirds'), for bins of any width:
-    /// each fine cell counts by its share inside a bin, so no band gets two cells where its
-    /// neighbour gets three. Without coatings or dispersion the throughput is flat, so the
-    /// colours add exactly.
-    #[test]
-    fn bin_colours_add_up_under_refinement() {
-        let sys = LensSystem::new(
+    /// A stop and an uncoated, dispersion-free plate: a flat throughput.
+    fn plate() -> LensSystem {
+        LensSystem::new(
             "plate",
             vec![
                 Surface::stop(1.0, 5.0),
@@ -175,7 +171,16 @@ mod tests {
                 Surface::spherical(0.0, 5.0, Medium::Air, 8.0),
                 Surface::sensor(10.0),
             ],
-        );
+        )
+    }
+
+    /// A bin's colour is the sum of its halves' (and of its thirds'), for bins of any width:
+    /// each fine cell counts by its share inside a bin, so no band gets two cells where its
+    /// neighbour gets three. Without coatings or dispersion the throughput is flat, so the
+    /// colours add exactly.
+    #[test]
+    fn bin_colours_add_up_under_refinement() {
+        let sys = plate();
         let path = GhostPath::two(2, 1);
         let c = GhostColours::new(&sys, LightSpectrum::D65, 1.0).unwrap();
         let colour = |m: usize, i: usize| c.bin_colour(path, &Bin::new(&sys, m, i));
@@ -221,15 +226,7 @@ mod tests {
     /// the band colours are the light's own colour split by bands and sum to it.
     #[test]
     fn flat_throughput_gives_the_light_colour() {
-        let mut sys = LensSystem::new(
-            "plate",
-            vec![
-                Surface::stop(1.0, 5.0),
-                Surface::spherical(0.0, 2.0, Medium::Model { nd: 1.5, vd: None }, 8.0),
-                Surface::spherical(0.0, 5.0, Medium::Air, 8.0),
-                Surface::sensor(10.0),
-            ],
-        );
+        let mut sys = plate();
         let path = GhostPath::two(2, 1);
         let c = GhostColours::new(&sys, LightSpectrum::D65, 1.0).unwrap();
         let bands: Vec<[f32; 3]> = (0..3)

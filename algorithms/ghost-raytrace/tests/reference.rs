@@ -6,6 +6,7 @@
 //! same). Not every lens converges as fast: the Cooke triplet's caustic ghosts gave 7.1e-3 at
 //! the same density.
 
+use flarebench_sdk::LensSystem;
 use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::ghost::ReflectionOrder;
 use flarebench_sdk::ghost::render::Frame;
@@ -17,19 +18,22 @@ use ghost_raytrace::reference::{
 };
 use ghost_raytrace::scene::LightSpec;
 
+/// A bundled lens and a frame of `width × height` pixels across its film.
+fn lens_and_frame(stem: &str, width: usize, height: usize) -> (LensSystem, Frame) {
+    let path = format!("{}/../../lenses/{stem}.xml", env!("CARGO_MANIFEST_DIR"));
+    let sys = read_lens(std::path::Path::new(&path)).unwrap().system;
+    let frame = Frame {
+        width,
+        height,
+        film_width_mm: sys.film_width_mm,
+        film_height_mm: sys.film_width_mm * height as f64 / width as f64,
+    };
+    (sys, frame)
+}
+
 #[test]
 fn doubling_the_reference_rays_changes_the_image_by_under_a_thousandth() {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../lenses/heliar-tronnier.xml"
-    );
-    let sys = read_lens(std::path::Path::new(path)).unwrap().system;
-    let frame = Frame {
-        width: 160,
-        height: 90,
-        film_width_mm: sys.film_width_mm,
-        film_height_mm: sys.film_width_mm * 90.0 / 160.0,
-    };
+    let (sys, frame) = lens_and_frame("heliar-tronnier", 160, 90);
     let lights = [LightSpec::parse("5,30").unwrap()];
     let render = |density: f64| {
         let plans = reference_plans(&sys, &lights, &frame, density).unwrap();
@@ -55,17 +59,7 @@ fn doubling_the_reference_rays_changes_the_image_by_under_a_thousandth() {
 /// had before version 3, at 960 × 540, this ghost was 0.95% from 160 bands.)
 #[test]
 fn doubling_the_reference_bands_changes_a_dispersive_ghost_by_under_a_thousandth() {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../lenses/nikon-zoom-short.xml"
-    );
-    let sys = read_lens(std::path::Path::new(path)).unwrap().system;
-    let frame = Frame {
-        width: 480,
-        height: 270,
-        film_width_mm: sys.film_width_mm,
-        film_height_mm: sys.film_width_mm * 270.0 / 480.0,
-    };
+    let (sys, frame) = lens_and_frame("nikon-zoom-short", 480, 270);
     let lights = [LightSpec::parse("10,30").unwrap()];
     // The reference's plan of the ghost with the most bands its dispersion asked for (under
     // the most, which a ghost without a paraxial image takes), alone.
