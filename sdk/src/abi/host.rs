@@ -677,8 +677,13 @@ impl PluginInstance<'_> {
         loop {
             image.width = f.width;
             image.height = f.height;
-            image.pixels.clear();
-            image.pixels.resize(f.width * f.height, [0.0; 3]);
+            if image.pixels.len() == f.width * f.height {
+                // The same buffer as the last frame's: cleared on every core.
+                image.fill_black();
+            } else {
+                image.pixels.clear();
+                image.pixels.resize(f.width * f.height, [0.0; 3]);
+            }
             let (vcap, tcap) = self.mesh_capacity;
             let mut vertices = vec![
                 MeshVertex {

@@ -167,7 +167,7 @@ pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
                 let t1 = Instant::now();
                 // Into one frame buffer kept from run to run and cleared in the timed part, as
                 // a live preview draws into its window's buffer.
-                img.pixels.fill([0.0; 3]);
+                img.fill_black();
                 ghosts::render_into(&sys, &aperture, frame, &plans, options, &mut img.pixels)?;
                 let t2 = Instant::now();
                 anyhow::ensure!(!img.has_non_finite(), "non-finite pixels");
