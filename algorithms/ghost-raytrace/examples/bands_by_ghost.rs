@@ -35,12 +35,7 @@ fn main() {
     let lights = [LightSpec::parse(light).expect("light")];
     let (w, h) = size.split_once('x').expect("WxH");
     let (w, h): (usize, usize) = (w.parse().expect("width"), h.parse().expect("height"));
-    let frame = Frame {
-        width: w,
-        height: h,
-        film_width_mm: sys.film_width_mm,
-        film_height_mm: sys.film_width_mm * h as f64 / w as f64,
-    };
+    let frame = Frame::across_film(w, h, sys.film_width_mm);
     // The plan of one ghost alone, from a plan of every ghost.
     let alone = |mut lp: LightPlan| -> LightPlan {
         let k = lp

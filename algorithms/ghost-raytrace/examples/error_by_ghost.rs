@@ -46,12 +46,7 @@ fn main() {
     let light = LightSpec::parse(light).expect("light");
     let (w, h) = size.split_once('x').expect("WxH");
     let (w, h): (usize, usize) = (w.parse().unwrap(), h.parse().unwrap());
-    let frame = Frame {
-        width: w,
-        height: h,
-        film_width_mm: sys.film_width_mm,
-        film_height_mm: sys.film_width_mm * h as f64 / w as f64,
-    };
+    let frame = Frame::across_film(w, h, sys.film_width_mm);
     let quality: Quality = quality.parse().expect("quality");
     let mut opts = PlanOptions::for_quality(quality, None);
     if let Some(b) = rest.first() {

@@ -22,12 +22,7 @@ use ghost_raytrace::scene::LightSpec;
 fn lens_and_frame(stem: &str, width: usize, height: usize) -> (LensSystem, Frame) {
     let path = format!("{}/../../lenses/{stem}.xml", env!("CARGO_MANIFEST_DIR"));
     let sys = read_lens(std::path::Path::new(&path)).unwrap().system;
-    let frame = Frame {
-        width,
-        height,
-        film_width_mm: sys.film_width_mm,
-        film_height_mm: sys.film_width_mm * height as f64 / width as f64,
-    };
+    let frame = Frame::across_film(width, height, sys.film_width_mm);
     (sys, frame)
 }
 

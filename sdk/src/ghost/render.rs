@@ -39,6 +39,17 @@ pub struct Frame {
 }
 
 impl Frame {
+    /// A `width × height` image across a film `film_width_mm` wide, with square pixels (the
+    /// film's height follows the image's aspect).
+    pub fn across_film(width: usize, height: usize, film_width_mm: f64) -> Frame {
+        Frame {
+            width,
+            height,
+            film_width_mm,
+            film_height_mm: film_width_mm * height as f64 / width as f64,
+        }
+    }
+
     /// Pixel coordinates of sensor point (x, y) mm (photograph orientation).
     pub fn to_pixel(&self, x: f64, y: f64) -> [f32; 2] {
         [
@@ -834,6 +845,15 @@ pub(crate) fn smoothstep(edge0: f32, edge1: f32, x: f32) -> f32 {
 mod tests {
     use super::*;
     use proptest::prelude::*;
+
+    /// A frame across a film keeps square pixels.
+    #[test]
+    fn a_frame_across_a_film_has_square_pixels() {
+        let f = Frame::across_film(1920, 1080, 36.0);
+        assert_eq!((f.width, f.height, f.film_width_mm), (1920, 1080, 36.0));
+        assert!((f.film_height_mm - 20.25).abs() < 1e-12);
+        assert!((f.pixel_area_mm2() - f.pixel_mm() * f.pixel_mm()).abs() < 1e-15);
+    }
 
     /// The attributes of pixel `k` as the rasterizer steps them along a row.
     fn stepped(a: &EdgeAttrs, step: &EdgeAttrs, k: usize) -> EdgeAttrs {
