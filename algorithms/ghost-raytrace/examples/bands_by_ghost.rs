@@ -19,7 +19,7 @@ use flarebench_sdk::image::HdrImage;
 use flarebench_sdk::io::read_lens;
 use ghost_raytrace::ghosts::{self, RenderOptions};
 use ghost_raytrace::plan::{self, GhostJob, LightPlan, PlanOptions};
-use ghost_raytrace::reference::reference_plans_dense;
+use ghost_raytrace::reference::{reference_options, reference_plans_dense};
 use ghost_raytrace::scene::{LightSpec, Quality};
 
 fn main() {
@@ -57,7 +57,7 @@ fn main() {
         let opts = PlanOptions {
             bands,
             min_bands: bands,
-            ..reference_options()
+            ..reference_options(ReflectionOrder::Two)
         };
         let mut lp = alone(
             plan::plan(&sys, &lights, &frame, &opts)
@@ -133,23 +133,5 @@ fn main() {
                 error(&render(&fixed(bands), true))
             );
         }
-    }
-}
-
-/// The reference's plan options (no culling, full resolution, exact tables, the reference's
-/// grid scale).
-fn reference_options() -> PlanOptions<'static> {
-    PlanOptions {
-        quality: Quality::High,
-        bands: 31,
-        min_bands: 31,
-        band_spacing_px: 1.0,
-        cull: false,
-        grid_scale: ghost_raytrace::reference::REFERENCE_GRID_SCALE,
-        precomputed: None,
-        exact_tables: true,
-        max_downscale: 1,
-        reflections: ReflectionOrder::Two,
-        lens_tables: None,
     }
 }

@@ -161,6 +161,25 @@ pub fn reference_plans_of_order(
     reference_plans_dense(system, lights, frame, density, 1.0, reflections)
 }
 
+/// The reference's plan options for the ghosts of `reflections`: no culling, every ghost at
+/// full resolution, exact tables, its bands and grid scale. Its plans also raise every grid
+/// to [`REFERENCE_MIN_GRID`] ([`reference_plans_dense`]).
+pub fn reference_options(reflections: ReflectionOrder) -> PlanOptions<'static> {
+    PlanOptions {
+        quality: Quality::High,
+        bands: REFERENCE_MAX_BANDS,
+        min_bands: REFERENCE_MIN_BANDS,
+        band_spacing_px: REFERENCE_BAND_SPACING_PX,
+        cull: false,
+        grid_scale: REFERENCE_GRID_SCALE,
+        precomputed: None,
+        exact_tables: true,
+        max_downscale: 1,
+        reflections,
+        lens_tables: None,
+    }
+}
+
 /// [`reference_plans_of_order`] with `band_density` times the bands too: neighbouring bands
 /// closer by that factor, and that many more at most and at least (the spectral convergence
 /// check).
@@ -173,18 +192,13 @@ pub fn reference_plans_dense(
     reflections: ReflectionOrder,
 ) -> Result<Vec<LightPlan>, GhostRenderError> {
     let scaled = |n: usize| ((n as f64 * band_density).round() as usize).max(1);
+    let base = reference_options(reflections);
     let opts = PlanOptions {
-        quality: Quality::High,
-        bands: scaled(REFERENCE_MAX_BANDS),
-        min_bands: scaled(REFERENCE_MIN_BANDS),
-        band_spacing_px: REFERENCE_BAND_SPACING_PX / band_density,
-        cull: false,
-        grid_scale: REFERENCE_GRID_SCALE * density,
-        precomputed: None,
-        exact_tables: true,
-        max_downscale: 1,
-        reflections,
-        lens_tables: None,
+        bands: scaled(base.bands),
+        min_bands: scaled(base.min_bands),
+        band_spacing_px: base.band_spacing_px / band_density,
+        grid_scale: base.grid_scale * density,
+        ..base
     };
     let mut plans = plan::plan(system, lights, frame, &opts)?;
     let min_grid = (REFERENCE_MIN_GRID as f64 * density).round() as usize;
