@@ -9,7 +9,10 @@ mod upsample;
 use rayon::prelude::*;
 use serde::Serialize;
 
-pub use upsample::{CoarseGrid, add_upsampled, add_upsampled_into, add_upsampled_levels_into};
+pub use upsample::{
+    Blend, CoarseGrid, add_upsampled, add_upsampled_into, add_upsampled_levels_into,
+    upsample_levels_into,
+};
 
 use crate::color::srgb::LUMINANCE_WEIGHTS;
 

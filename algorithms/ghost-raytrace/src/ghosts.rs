@@ -2,10 +2,10 @@
 //! image, ghosts spread over the cores.
 //!
 //! Ghosts are grouped by their coarse-frame factor ([`GhostJob::downscale`]): each group is
-//! drawn into a coarse copy of the frame (full resolution for factor 1) and added to the
-//! output by bilinear upsampling, all coarse frames in one pass
-//! (`flarebench_sdk::image::add_upsampled_levels_into`); full-resolution ghosts are drawn
-//! straight into the output. Within a group, each ghost's bands are traced and meshed in
+//! drawn into a coarse copy of the frame and added to the output by bilinear upsampling, all
+//! coarse frames in one pass (`flarebench_sdk::image::upsample_levels_into`, which may also
+//! replace what the output held); full-resolution ghosts are then drawn straight into the
+//! output. Within a group, each ghost's bands are traced and meshed in
 //! parallel, and each batch of meshes is rasterized in one pass, its tiles spread over the
 //! cores.
 //!
@@ -19,7 +19,7 @@ use flarebench_sdk::ghost::render::{
     BandRef, Frame, GhostContext, GhostLight, GhostMesh, GhostStats, mesh_ghost,
     rasterize_ghost_mesh_into,
 };
-use flarebench_sdk::image::{CoarseGrid, HdrImage, add_upsampled_levels_into};
+use flarebench_sdk::image::{Blend, CoarseGrid, HdrImage, upsample_levels_into};
 use flarebench_sdk::paraxial::{analyse, stop_opening};
 use flarebench_sdk::spectrum::LAMBDA_D_NM;
 use rayon::prelude::*;
@@ -38,6 +38,35 @@ pub struct RenderOptions {
     /// (`flarebench_sdk::ghost::fringe`; the default, and where the model does not hold a ghost
     /// is drawn band by band anyway). The reference renderer draws band by band.
     pub band_by_band: bool,
+    /// Discard what the output buffer held instead of adding to it ([`render_into`]): the
+    /// upsampling pass writes every pixel, so a buffer kept from frame to frame (a live
+    /// preview's, the bench's) needs no clearing first. The image is the same, bit for bit.
+    pub replace: bool,
+}
+
+/// Buffers a renderer keeps from frame to frame ([`render_into_reusing`]): the coarse frames,
+/// so that rendering frame after frame does not fault fresh pages in for them.
+#[derive(Debug, Default)]
+pub struct RenderScratch {
+    coarse: Vec<HdrImage>,
+}
+
+impl RenderScratch {
+    /// A black image of `width × height`: a kept one of that size, cleared, or a new one.
+    fn take(&mut self, width: usize, height: usize) -> HdrImage {
+        match self
+            .coarse
+            .iter()
+            .position(|i| (i.width, i.height) == (width, height))
+        {
+            Some(k) => {
+                let mut img = self.coarse.swap_remove(k);
+                img.fill_black();
+                img
+            }
+            None => HdrImage::new(width, height),
+        }
+    }
 }
 
 /// Renders every planned ghost; returns the image and, per light, each ghost's statistics in
@@ -64,14 +93,29 @@ pub fn render_with(
     Ok((img, stats))
 }
 
-/// [`render_with`] adding into `out`, a row-major buffer of `frame`'s size (a plugin host's
-/// buffer, say), so that no image of the frame's size is allocated for the result.
+/// [`render_with`] adding into `out` (or replacing it, [`RenderOptions::replace`]), a
+/// row-major buffer of `frame`'s size (a plugin host's buffer, say), so that no image of the
+/// frame's size is allocated for the result.
 pub fn render_into(
     system: &LensSystem,
     aperture: &Aperture,
     frame: Frame,
     plans: &[LightPlan],
     options: RenderOptions,
+    out: &mut [[f32; 3]],
+) -> Result<Vec<Vec<GhostStats>>, GhostRenderError> {
+    let mut scratch = RenderScratch::default();
+    render_into_reusing(system, aperture, frame, plans, options, &mut scratch, out)
+}
+
+/// [`render_into`] with the coarse frames kept in `scratch` for the next call.
+pub fn render_into_reusing(
+    system: &LensSystem,
+    aperture: &Aperture,
+    frame: Frame,
+    plans: &[LightPlan],
+    options: RenderOptions,
+    scratch: &mut RenderScratch,
     out: &mut [[f32; 3]],
 ) -> Result<Vec<Vec<GhostStats>>, GhostRenderError> {
     if out.len() != frame.width * frame.height {
@@ -94,37 +138,56 @@ pub fn render_into(
         .collect();
     jobs.sort_unstable();
     let mut stats = Vec::with_capacity(jobs.len());
+    let stop_radius = stop_opening(system);
+    let ctx_at = |grid: &CoarseGrid| GhostContext {
+        system,
+        aperture,
+        frame: frame.coarse(grid),
+        stop_radius,
+        f_number: p.f_number,
+        trace_f64: options.trace_f64,
+    };
+    // The coarse groups first, each into its coarse frame; then every coarse frame added to
+    // (or replacing) the output in one pass; then the full-resolution group straight into the
+    // output. (The same order either way, so replacing gives what adding to black does.)
+    let groups: Vec<&[(usize, usize, usize)]> = jobs.chunk_by(|a, b| a.0 == b.0).collect();
     let mut coarse = Vec::new();
-    for group in jobs.chunk_by(|a, b| a.0 == b.0) {
+    for group in groups.iter().filter(|g| g[0].0 > 1) {
         let grid = CoarseGrid::for_frame(frame.width, frame.height, group[0].0);
-        let ctx = GhostContext {
-            system,
-            aperture,
-            frame: frame.coarse(&grid),
-            stop_radius: stop_opening(system),
-            f_number: p.f_number,
-            trace_f64: options.trace_f64,
-        };
-        if grid.factor == 1 {
-            // Full resolution: straight into the output.
-            render_group(&ctx, plans, group, options, &mut stats, out, frame.width);
-        } else {
-            let mut img = HdrImage::new(grid.width, grid.height);
-            render_group(
-                &ctx,
-                plans,
-                group,
-                options,
-                &mut stats,
-                &mut img.pixels,
-                grid.width,
-            );
-            coarse.push((img, grid));
-        }
+        let mut img = scratch.take(grid.width, grid.height);
+        render_group(
+            &ctx_at(&grid),
+            plans,
+            group,
+            options,
+            &mut stats,
+            &mut img.pixels,
+            grid.width,
+        );
+        coarse.push((img, grid));
     }
-    // Every coarse frame added in one pass over the output.
     let levels: Vec<(&HdrImage, &CoarseGrid)> = coarse.iter().map(|(i, g)| (i, g)).collect();
-    add_upsampled_levels_into(out, frame.width, &levels);
+    let blend = if options.replace {
+        Blend::Replace
+    } else {
+        Blend::Add
+    };
+    upsample_levels_into(out, frame.width, &levels, blend);
+    scratch
+        .coarse
+        .extend(coarse.into_iter().map(|(img, _)| img));
+    if let Some(group) = groups.iter().find(|g| g[0].0 == 1) {
+        let grid = CoarseGrid::for_frame(frame.width, frame.height, 1);
+        render_group(
+            &ctx_at(&grid),
+            plans,
+            group,
+            options,
+            &mut stats,
+            out,
+            frame.width,
+        );
+    }
     stats.sort_by_key(|&(l, g, _)| (l, g));
     let mut per_light: Vec<Vec<GhostStats>> = plans
         .iter()

@@ -23,6 +23,8 @@ pub struct GhostRaytrace {
     lens: Option<LensSystem>,
     /// The prepared lens's interface tables, for every frame's plan.
     tables: Option<LensTables>,
+    /// The coarse frames, kept from frame to frame.
+    scratch: ghosts::RenderScratch,
 }
 
 /// The scene's lights as the renderer's [`LightSpec`]s.
@@ -121,13 +123,15 @@ impl FlarePlugin for GhostRaytrace {
             ..plan_options(params)?
         };
         let plans = plan::plan(lens, &light_specs(scene), &scene.frame, &opts)?;
-        // Straight into the host's buffer: no image of the frame's size, no copy.
-        ghosts::render_into(
+        // Straight into the host's buffer: no image of the frame's size, no copy. (The host
+        // hands it over black, and other plugins' images may be added to it: added to.)
+        ghosts::render_into_reusing(
             lens,
             &scene.aperture,
             scene.frame,
             &plans,
             ghosts::RenderOptions::default(),
+            &mut self.scratch,
             out.pixels,
         )?;
         out.items_drawn = plans.iter().map(|p| p.ghosts.len() as u32).sum();

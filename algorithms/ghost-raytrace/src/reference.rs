@@ -32,6 +32,7 @@ use crate::scene::{LightSpec, Quality};
 const BAND_BY_BAND: ghosts::RenderOptions = ghosts::RenderOptions {
     trace_f64: false,
     band_by_band: true,
+    replace: false,
 };
 
 /// The fewest wavelength bands a ghost of the reference is traced at.

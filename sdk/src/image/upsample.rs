@@ -136,6 +136,30 @@ pub fn add_upsampled_levels_into(
     width: usize,
     levels: &[(&HdrImage, &CoarseGrid)],
 ) {
+    upsample_levels_into(dst, width, levels, Blend::Add);
+}
+
+/// What an upsampling pass does with what the full-resolution buffer held.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Blend {
+    /// Adds the levels to it.
+    Add,
+    /// Discards it: every pixel is written, black where no level is lit. The buffer needs no
+    /// clearing first, and the pass only writes it (a frame kept from frame to frame is
+    /// cleared and refilled in one pass instead of two).
+    Replace,
+}
+
+/// [`add_upsampled_levels_into`], adding to `dst` or replacing it as `blend` says.
+///
+/// # Panics
+/// If a coarse image is not its grid's size, or `dst.len()` is not a multiple of `width`.
+pub fn upsample_levels_into(
+    dst: &mut [[f32; 3]],
+    width: usize,
+    levels: &[(&HdrImage, &CoarseGrid)],
+    blend: Blend,
+) {
     for (coarse, grid) in levels {
         assert_eq!(
             (coarse.width, coarse.height),
@@ -147,7 +171,14 @@ pub fn add_upsampled_levels_into(
         .iter()
         .filter(|(_, g)| g.width > 0 && g.height > 0)
         .collect();
-    if width == 0 || dst.is_empty() || levels.is_empty() {
+    if width == 0 || dst.is_empty() {
+        return;
+    }
+    if levels.is_empty() {
+        if blend == Blend::Replace {
+            dst.par_chunks_mut(CLEAR_CHUNK)
+                .for_each(|chunk| chunk.fill([0.0; 3]));
+        }
         return;
     }
     assert_eq!(dst.len() % width, 0, "whole rows");
@@ -202,6 +233,9 @@ pub fn add_upsampled_levels_into(
                 for (k, row) in rows.chunks_exact_mut(width).enumerate() {
                     let y = block * ROWS_PER_BLOCK + k;
                     let row = row.as_flattened_mut();
+                    if blend == Blend::Replace {
+                        row.fill(0.0);
+                    }
                     for ((coarse, cw, norm, runs, ys, spans), pair) in setup.iter().zip(&mut *cache)
                     {
                         let (j0, j1, ty) = ys[y];
@@ -250,6 +284,10 @@ fn add_between(row: &mut [f32], a: &WideRow, b: &WideRow, t: f32) {
         }
     }
 }
+
+/// Pixels per chunk when a pass with no level clears the buffer (384 KB, as
+/// `HdrImage::fill_black`).
+const CLEAR_CHUNK: usize = 1 << 15;
 
 /// Output rows per block of [`add_upsampled_levels_into`]'s pass (each block reuses its
 /// levels' full-width rows).
@@ -414,6 +452,32 @@ mod tests {
         let before = fused.clone();
         add_upsampled_levels_into(&mut fused.pixels, w, &[]);
         assert_eq!(fused, before);
+    }
+
+    #[test]
+    fn replacing_equals_adding_to_black_whatever_the_buffer_held() {
+        // Two row blocks and a bit, sparse levels: some output rows see no lit level.
+        let (w, h) = (41, 2 * ROWS_PER_BLOCK + 5);
+        let levels: Vec<(HdrImage, CoarseGrid)> = [2, 8]
+            .iter()
+            .map(|&f| {
+                let grid = CoarseGrid::for_frame(w, h, f);
+                let mut img = HdrImage::new(grid.width, grid.height);
+                img.pixels[grid.width + 1] = [f as f32, 1.0, 0.25];
+                (img, grid)
+            })
+            .collect();
+        let refs: Vec<(&HdrImage, &CoarseGrid)> = levels.iter().map(|(i, g)| (i, g)).collect();
+        let mut added = HdrImage::new(w, h);
+        upsample_levels_into(&mut added.pixels, w, &refs, Blend::Add);
+        assert!(added.sum()[0] > 0.0);
+        let mut stale = HdrImage::new(w, h);
+        stale.pixels.fill([7.0, f32::NAN, -3.0]);
+        upsample_levels_into(&mut stale.pixels, w, &refs, Blend::Replace);
+        assert_eq!(stale, added);
+        // No levels: replacing clears.
+        upsample_levels_into(&mut stale.pixels, w, &[], Blend::Replace);
+        assert_eq!(stale, HdrImage::new(w, h));
     }
 
     /// Every pixel of every level interpolated, black or not: what the span-skipping pass

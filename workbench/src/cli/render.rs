@@ -349,6 +349,7 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
         ghosts::RenderOptions {
             trace_f64: args.f64,
             band_by_band: args.band_by_band,
+            ..Default::default()
         },
     )?;
     timings.render_ms = ms(t);

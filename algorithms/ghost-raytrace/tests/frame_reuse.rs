@@ -1,0 +1,82 @@
+//! A frame buffer and coarse frames kept from frame to frame (`ghosts::render_into_reusing`,
+//! `RenderOptions::replace`) give the image a fresh render gives, whatever they held.
+
+use std::path::Path;
+
+use flarebench_sdk::aperture::Aperture;
+use flarebench_sdk::ghost::render::Frame;
+use flarebench_sdk::image::HdrImage;
+use flarebench_sdk::io::read_lens;
+use ghost_raytrace::ghosts::{self, RenderOptions, RenderScratch};
+use ghost_raytrace::plan::{self, PlanOptions};
+use ghost_raytrace::scene::{LightSpec, Quality};
+
+/// Ghosts are meshed on several cores; measured differences between two renders of one plan
+/// are under 1e-7 relative (f32 rounding of the sums).
+const SAME_IMAGE_TOL: f64 = 1e-5;
+
+#[test]
+fn a_kept_buffer_replaced_frame_after_frame_holds_each_frame_alone() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../lenses/heliar-tronnier.xml"
+    );
+    let sys = read_lens(Path::new(path)).unwrap().system;
+    let frame = Frame::across_film(320, 180, sys.film_width_mm);
+    let aperture = Aperture::Circular;
+    let opts = PlanOptions::for_quality(Quality::Default, None);
+    let plan_of =
+        |light: &str| plan::plan(&sys, &[LightSpec::parse(light).unwrap()], &frame, &opts).unwrap();
+    // Two lights whose ghosts land elsewhere and at several coarse factors, each including
+    // full resolution (drawn after the upsampling pass) and coarse ones.
+    let scenes = [plan_of("10,30"), plan_of("4,200"), plan_of("10,30")];
+    for plans in &scenes {
+        let factors: Vec<usize> = plans[0].ghosts.iter().map(|j| j.downscale).collect();
+        assert!(factors.contains(&1), "{factors:?}");
+        assert!(factors.iter().any(|&f| f > 1), "{factors:?}");
+    }
+    let mut scratch = RenderScratch::default();
+    let mut kept = HdrImage::new(frame.width, frame.height);
+    kept.pixels.fill([3.0, f32::NAN, -1.0]);
+    let replace = RenderOptions {
+        replace: true,
+        ..Default::default()
+    };
+    for plans in &scenes {
+        let (alone, _) = ghosts::render(&sys, &aperture, frame, plans).unwrap();
+        assert!(alone.luminance_sum() > 0.0);
+        ghosts::render_into_reusing(
+            &sys,
+            &aperture,
+            frame,
+            plans,
+            replace,
+            &mut scratch,
+            &mut kept.pixels,
+        )
+        .unwrap();
+        assert!(!kept.has_non_finite());
+        let c = kept.compare(&alone).unwrap();
+        assert!(
+            c.relative_rmse < SAME_IMAGE_TOL && c.energy_error.abs() < SAME_IMAGE_TOL,
+            "{c:?}"
+        );
+    }
+    // Adding (the default) keeps what the buffer held.
+    let mut twice = HdrImage::new(frame.width, frame.height);
+    for _ in 0..2 {
+        ghosts::render_into_reusing(
+            &sys,
+            &aperture,
+            frame,
+            &scenes[0],
+            RenderOptions::default(),
+            &mut scratch,
+            &mut twice.pixels,
+        )
+        .unwrap();
+    }
+    let (once, _) = ghosts::render(&sys, &aperture, frame, &scenes[0]).unwrap();
+    let ratio = twice.luminance_sum() / once.luminance_sum();
+    assert!((ratio - 2.0).abs() < 1e-5, "{ratio}");
+}
