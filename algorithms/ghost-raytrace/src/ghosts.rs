@@ -137,57 +137,52 @@ pub fn render_into_reusing(
         })
         .collect();
     jobs.sort_unstable();
-    let mut stats = Vec::with_capacity(jobs.len());
     let stop_radius = stop_opening(system);
-    let ctx_at = |grid: &CoarseGrid| GhostContext {
-        system,
-        aperture,
-        frame: frame.coarse(grid),
-        stop_radius,
-        f_number: p.f_number,
-        trace_f64: options.trace_f64,
-    };
-    // The coarse groups first, each into its coarse frame; then every coarse frame added to
-    // (or replacing) the output in one pass; then the full-resolution group straight into the
-    // output. (The same order either way, so replacing gives what adding to black does.)
-    let groups: Vec<&[(usize, usize, usize)]> = jobs.chunk_by(|a, b| a.0 == b.0).collect();
-    let mut coarse = Vec::new();
-    for group in groups.iter().filter(|g| g[0].0 > 1) {
-        let grid = CoarseGrid::for_frame(frame.width, frame.height, group[0].0);
-        let mut img = scratch.take(grid.width, grid.height);
-        render_group(
-            &ctx_at(&grid),
-            plans,
-            group,
-            options,
-            &mut stats,
-            &mut img.pixels,
-            grid.width,
-        );
-        coarse.push((img, grid));
-    }
-    let levels: Vec<(&HdrImage, &CoarseGrid)> = coarse.iter().map(|(i, g)| (i, g)).collect();
-    let blend = if options.replace {
-        Blend::Replace
-    } else {
-        Blend::Add
-    };
-    upsample_levels_into(out, frame.width, &levels, blend);
-    scratch
-        .coarse
-        .extend(coarse.into_iter().map(|(img, _)| img));
-    if let Some(group) = groups.iter().find(|g| g[0].0 == 1) {
-        let grid = CoarseGrid::for_frame(frame.width, frame.height, 1);
-        render_group(
-            &ctx_at(&grid),
-            plans,
-            group,
-            options,
-            &mut stats,
+    // The coarse groups first, then the full-resolution one (factor 1 sorts first).
+    let mut groups: Vec<&[(usize, usize, usize)]> = jobs.chunk_by(|a, b| a.0 == b.0).collect();
+    let full_first = groups.first().is_some_and(|g| g[0].0 == 1);
+    groups.rotate_left(usize::from(full_first));
+    let grids: Vec<CoarseGrid> = groups
+        .iter()
+        .map(|g| CoarseGrid::for_frame(frame.width, frame.height, g[0].0))
+        .collect();
+    let ctxs: Vec<GhostContext<'_>> = grids
+        .iter()
+        .map(|grid| GhostContext {
+            system,
+            aperture,
+            frame: frame.coarse(grid),
+            stop_radius,
+            f_number: p.f_number,
+            trace_f64: options.trace_f64,
+        })
+        .collect();
+    let coarse_groups = grids.iter().take_while(|g| g.factor > 1).count();
+    let mut coarse: Vec<HdrImage> = grids[..coarse_groups]
+        .iter()
+        .map(|g| scratch.take(g.width, g.height))
+        .collect();
+    let per_ghost = {
+        let mut targets = Targets {
+            grids: &grids,
+            coarse: &mut coarse,
             out,
-            frame.width,
-        );
-    }
+            width: frame.width,
+            blend: if options.replace {
+                Blend::Replace
+            } else {
+                Blend::Add
+            },
+            upsampled: false,
+        };
+        render_groups(&ctxs, plans, &groups, options, &mut targets)
+    };
+    scratch.coarse.extend(coarse);
+    let mut stats: Vec<(usize, usize, GhostStats)> = groups
+        .iter()
+        .zip(per_ghost)
+        .flat_map(|(group, s)| group.iter().zip(s).map(|(&(_, l, g), s)| (l, g, s)))
+        .collect();
     stats.sort_by_key(|&(l, g, _)| (l, g));
     let mut per_light: Vec<Vec<GhostStats>> = plans
         .iter()
@@ -218,62 +213,109 @@ pub const FRINGE_MIN_PIXELS: f64 = 32.0;
 /// take (about 40 bytes a vertex, 30 MB at this size) while keeping rasterizer calls few.
 const BATCH_TRIANGLES: usize = 1 << 18;
 
-/// Adds the ghosts `group` (`(factor, light, ghost)`) into `pixels`, a row-major buffer of
-/// `ctx.frame`'s size (`width` pixels wide), appending each ghost's statistics to `stats`.
-/// Each ghost's bands are traced and turned into triangles in parallel, in batches of about
-/// [`BATCH_TRIANGLES`]; each batch is rasterized in one pass (tiles in parallel), in plan
-/// order, so the image does not depend on the number of threads.
-fn render_group(
-    ctx: &GhostContext<'_>,
-    plans: &[LightPlan],
-    group: &[(usize, usize, usize)],
-    options: RenderOptions,
-    stats: &mut Vec<(usize, usize, GhostStats)>,
-    pixels: &mut [[f32; 3]],
+/// Where the groups are drawn: the coarse groups (the first `coarse.len()`) each into its
+/// coarse frame; those added to (or replacing) the output in one pass once every coarse ghost
+/// is drawn; the full-resolution group then straight into the output. (The same order either
+/// way, so replacing gives what adding to black does.)
+struct Targets<'a> {
+    grids: &'a [CoarseGrid],
+    coarse: &'a mut [HdrImage],
+    out: &'a mut [[f32; 3]],
     width: usize,
-) {
-    // Units of work: (index in `group`, a range of that ghost's bands), with their triangle
-    // counts: a group of a fringed ghost's bands (split evenly), or one band.
-    let px = ctx.frame.pixel_mm();
-    let fringed = |job: &GhostJob, triangles: usize| {
+    blend: Blend,
+    upsampled: bool,
+}
+
+impl Targets<'_> {
+    /// The upsampling pass, once.
+    fn upsample(&mut self) {
+        if !self.upsampled {
+            let levels: Vec<(&HdrImage, &CoarseGrid)> =
+                self.coarse.iter().zip(self.grids).collect();
+            upsample_levels_into(self.out, self.width, &levels, self.blend);
+            self.upsampled = true;
+        }
+    }
+}
+
+/// Draws the ghosts of `groups` (each `(factor, light, ghost)`, coarse groups first; their
+/// contexts `ctxs`) into `targets`, returning each group's ghosts' statistics in its order.
+/// The ghosts' bands of every group are traced and turned into triangles in parallel, in
+/// batches of about [`BATCH_TRIANGLES`]; each batch's coarse groups are rasterized side by
+/// side (each one's tiles in parallel, its triangles in plan order, so the image does not
+/// depend on the number of threads).
+fn render_groups(
+    ctxs: &[GhostContext<'_>],
+    plans: &[LightPlan],
+    groups: &[&[(usize, usize, usize)]],
+    options: RenderOptions,
+    targets: &mut Targets<'_>,
+) -> Vec<Vec<GhostStats>> {
+    // Units of work, group by group: (group, index in it, a range of that ghost's bands, its
+    // triangle count): a group of a fringed ghost's bands (split evenly), or one band.
+    let fringed = |ctx: &GhostContext<'_>, job: &GhostJob, triangles: usize| {
         // Worth it where a band's drawn area outweighs the extra meshing of its triangles.
+        let px = ctx.frame.pixel_mm();
         !options.band_by_band
             && job.spectral()
             && matches!(ctx.aperture, Aperture::Circular)
             && job.bounds.sensor.area() / (px * px) >= FRINGE_MIN_PIXELS * triangles as f64
     };
-    let units: Vec<(usize, std::ops::Range<usize>, usize)> = group
+    let units: Vec<(usize, usize, std::ops::Range<usize>, usize)> = groups
         .iter()
         .enumerate()
-        .flat_map(|(k, &(_, l, g))| {
-            let job = &plans[l].ghosts[g];
-            let triangles = 2 * (job.grid.max(2) - 1).pow(2);
-            let m = job.bands.len();
-            let groups = if fringed(job, triangles) {
-                m.div_ceil(FRINGE_GROUP)
-            } else {
-                m
-            };
-            (0..groups).map(move |i| (k, i * m / groups..(i + 1) * m / groups, triangles))
+        .flat_map(|(gi, group)| {
+            let ctx = &ctxs[gi];
+            group.iter().enumerate().flat_map(move |(k, &(_, l, g))| {
+                let job = &plans[l].ghosts[g];
+                let triangles = 2 * (job.grid.max(2) - 1).pow(2);
+                let m = job.bands.len();
+                let parts = if fringed(ctx, job, triangles) {
+                    m.div_ceil(FRINGE_GROUP)
+                } else {
+                    m
+                };
+                (0..parts).map(move |i| (gi, k, i * m / parts..(i + 1) * m / parts, triangles))
+            })
         })
         .collect();
-    let mut per_ghost = vec![GhostStats::default(); group.len()];
+    let coarse_groups = targets.coarse.len();
+    let mut per_ghost: Vec<Vec<GhostStats>> = groups
+        .iter()
+        .map(|g| vec![GhostStats::default(); g.len()])
+        .collect();
+    // Each group's triangles: a batch takes in a next group only whole (the small groups of a
+    // frame meshed together, their work spread over the cores at once; a large group split
+    // into batches of its own, measured faster on the Nikon zoom than batches across groups).
+    let mut group_triangles = vec![0; groups.len()];
+    for u in &units {
+        group_triangles[u.0] += u.3;
+    }
     let mut all = GhostMesh::default();
     let mut start = 0;
     while start < units.len() {
         let mut end = start + 1;
-        let mut triangles = units[start].2;
-        while end < units.len() && triangles + units[end].2 <= BATCH_TRIANGLES {
-            triangles += units[end].2;
+        let mut triangles = units[start].3;
+        while end < units.len() {
+            let next = &units[end];
+            let fits = if next.0 == units[end - 1].0 {
+                triangles + next.3 <= BATCH_TRIANGLES
+            } else {
+                triangles + group_triangles[next.0] <= BATCH_TRIANGLES
+            };
+            if !fits {
+                break;
+            }
+            triangles += next.3;
             end += 1;
         }
         let meshes: Vec<(GhostMesh, GhostStats)> = units[start..end]
             .par_iter()
             .map_init(
                 || (GridTrace::default(), Vec::new()),
-                |(grid, grids), (k, range, triangles)| {
-                    let (k, triangles) = (*k, *triangles);
-                    let (_, l, g) = group[k];
+                |(grid, grids), (gi, k, range, triangles)| {
+                    let (ctx, triangles) = (&ctxs[*gi], *triangles);
+                    let (_, l, g) = groups[*gi][*k];
                     let lp = &plans[l];
                     let job = &lp.ghosts[g];
                     let light = GhostLight {
@@ -323,18 +365,42 @@ fn render_group(
                 },
             )
             .collect();
-        all.clear();
-        all.reserve(meshes.iter().map(|(m, _)| m));
-        for ((mesh, s), &(k, _, _)) in meshes.iter().zip(&units[start..end]) {
-            all.append(mesh);
-            let t = &mut per_ghost[k];
+        for ((_, s), &(gi, k, _, _)) in meshes.iter().zip(&units[start..end]) {
+            let t = &mut per_ghost[gi][k];
             t.rays += s.rays;
             t.triangles += s.triangles;
             t.flux += s.flux;
         }
+        // Group by group (the units are in group order), its meshes of the batch in plan
+        // order, into one mesh and rasterized.
+        let mut i = 0;
+        while i < meshes.len() {
+            let gi = units[start + i].0;
+            let j = i + units[start + i..end].partition_point(|u| u.0 == gi);
+            if gi >= coarse_groups {
+                // Every coarse ghost is drawn.
+                targets.upsample();
+            }
+            all.clear();
+            all.reserve(meshes[i..j].iter().map(|(m, _)| m));
+            for (mesh, _) in &meshes[i..j] {
+                all.append(mesh);
+            }
+            let aperture = ctxs[gi].aperture;
+            match targets.coarse.get_mut(gi) {
+                Some(img) => rasterize_ghost_mesh_into(
+                    &mut img.pixels,
+                    targets.grids[gi].width,
+                    &all,
+                    aperture,
+                ),
+                None => rasterize_ghost_mesh_into(targets.out, targets.width, &all, aperture),
+            }
+            i = j;
+        }
         drop(meshes);
-        rasterize_ghost_mesh_into(pixels, width, &all, ctx.aperture);
         start = end;
     }
-    stats.extend(group.iter().zip(per_ghost).map(|(&(_, l, g), s)| (l, g, s)));
+    targets.upsample();
+    per_ghost
 }
