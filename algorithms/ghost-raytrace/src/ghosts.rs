@@ -5,9 +5,9 @@
 //! drawn into a coarse copy of the frame and added to the output by bilinear upsampling, all
 //! coarse frames in one pass (`flarebench_sdk::image::upsample_levels_into`, which may also
 //! replace what the output held); full-resolution ghosts are then drawn straight into the
-//! output. Within a group, each ghost's bands are traced and meshed in
-//! parallel, and each batch of meshes is rasterized in one pass, its tiles spread over the
-//! cores.
+//! output. Every ghost's bands are traced and meshed in parallel, in batches that take small
+//! groups whole (`render_groups`); each group's meshes of a batch are rasterized in one pass,
+//! its tiles spread over the cores.
 //!
 //! [`GhostJob::downscale`]: crate::plan::GhostJob::downscale
 
