@@ -217,7 +217,7 @@ impl<'a> PlanOptions<'a> {
             grid_scale: quality.grid_scale(),
             precomputed,
             exact_tables: false,
-            max_downscale: MAX_DOWNSCALE,
+            max_downscale: quality.max_downscale(),
             reflections: ReflectionOrder::Two,
             lens_tables: None,
         }
@@ -620,7 +620,7 @@ pub fn dim_threshold(shares: impl Iterator<Item = f64>, budget: f64) -> f64 {
     f64::INFINITY
 }
 
-/// Largest coarse-frame factor of the presets.
+/// Largest coarse-frame factor of the presets (`Quality::max_downscale`).
 pub const MAX_DOWNSCALE: usize = 16;
 
 /// Coarse pixels a grid cell must span at least: the ghost's irradiance is interpolated

@@ -162,19 +162,41 @@ impl Quality {
 
     /// Coarse pixels a ghost's radius must span when it is drawn into a coarse frame
     /// (`plan::coarse_factor`): the edge blur this allows touches about 1/this of the ghost's
-    /// area. The default is the coarsest that keeps every measured Heliar frame within 2%
-    /// relative RMSE against the reference, with traced bounds and with a precomputed table
-    /// (2026-11-25, default preset otherwise). Heliar at 1920 × 1080, light 10°, 30°, traced /
-    /// table: 64: 2.89% / —, 80: 2.06% / —, 96: 1.96% / 2.03% (render about 30 ms), 104: 1.86%
-    /// / 1.99% (about 40 ms), 112: 1.85% / 1.93%, 128: 1.84% / 1.92% (about 55 ms), 160: 1.37%
-    /// (77 ms); at 960 × 540, 5°, 0° and 15°, 60°, 104: 1.46% and 1.11% (128: 1.45%, 1.01%).
-    /// The Nikon zoom (960 × 540, 10°, 30°) is over 2% at either: 104: 2.014% / 2.164%, 128:
-    /// 2.011% / 2.161%, its 1080p render about 20% faster at 104.
+    /// area. The default is the coarsest that keeps every measured frame within 2% relative
+    /// RMSE against the reference, with traced bounds and with a precomputed table.
+    /// Measured 2026-12-01 (against the spectrally converged reference, default preset
+    /// otherwise, [`Quality::max_downscale`] 8), table / traced:
+    ///
+    /// | frame | 104 | 96 | 80 | 64 |
+    /// |---|---|---|---|---|
+    /// | Heliar 1920 × 1080, 10°, 30° | 1.836% / 1.619% (20.6 ms) | 1.882% / 1.733% (17.8 ms) | 1.990% / 1.854% (17.6 ms) | 2.79% / 2.78% (14.4 ms) |
+    /// | Heliar 1920 × 1080, 20°, 120° | 1.560% / 1.491% | 1.642% / 1.588% | 1.642% / 1.588% | |
+    /// | Heliar 960 × 540, 5°, 0° | 1.502% / 1.523% | 1.543% / 1.568% | 1.845% / 1.866% | |
+    /// | Heliar 960 × 540, 15°, 60° | 1.139% / 1.169% | 1.246% / 1.247% | 1.322% / 1.247% | |
+    /// | Nikon zoom 960 × 540, 10°, 30° | 1.761% / 1.570% | 1.752% / 1.558% | | |
+    ///
+    /// (Times: the Heliar's default frame with a table.) Earlier, against the first reference
+    /// and with a largest factor of 16: 64 gave 2.89%, 80 2.06%, 128 1.84%, 160 1.37% on the
+    /// Heliar traced.
     pub fn coarse_pixels_per_radius(self) -> f64 {
         match self {
             Quality::Fast => 32.0,
-            Quality::Default => 104.0,
+            Quality::Default => 96.0,
             Quality::High => 512.0,
+        }
+    }
+
+    /// Largest coarse-frame factor a ghost may be drawn at (`plan::coarse_factor`). Measured
+    /// (2026-12-01, docs/performance.md; Heliar at 1920 × 1080, light 10°, 30°, against the
+    /// reference): at 8 rather than 16 the Heliar's default frame is as fast (its one ghost at
+    /// 1/16, 4-0, costs little more at 1/8) and its error falls from 1.961% to 1.836% with a
+    /// precomputed table (1.750% to 1.619% traced); the Nikon zoom's at 960 × 540 does not
+    /// change. The fast preset keeps 16: at 8 its frames took 7% (Heliar) and 12% (Nikon) longer.
+    pub fn max_downscale(self) -> usize {
+        match self {
+            Quality::Fast => 16,
+            Quality::Default => 8,
+            Quality::High => 8,
         }
     }
 

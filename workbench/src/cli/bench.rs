@@ -39,9 +39,9 @@ pub struct BenchArgs {
     /// Quality presets to time, comma separated.
     #[arg(long, value_delimiter = ',', default_values_t = Quality::ALL)]
     pub quality: Vec<Quality>,
-    /// Largest coarse-frame factor (as `render --max-downscale`).
-    #[arg(long, default_value_t = ghost_raytrace::plan::MAX_DOWNSCALE, value_parser = parse_downscale)]
-    pub max_downscale: usize,
+    /// Largest coarse-frame factor (as `render --max-downscale`; the preset's when absent).
+    #[arg(long, value_parser = parse_downscale)]
+    pub max_downscale: Option<usize>,
     /// Ghost paths: 2 (two reflections) or 4 (two and four reflections), as `render
     /// --reflections`; the reference then has the same paths.
     #[arg(long, default_value_t = ReflectionOrder::Two)]
@@ -148,11 +148,12 @@ pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
         let lens_tables = LensTables::new(&sys);
         let prepare_ms = t.elapsed().as_secs_f64() * 1e3;
         for &q in &args.quality {
+            let preset = PlanOptions::for_quality(q, table.as_ref());
             let opts = PlanOptions {
-                max_downscale: args.max_downscale,
+                max_downscale: args.max_downscale.unwrap_or(preset.max_downscale),
                 reflections: args.reflections,
                 lens_tables: Some(&lens_tables),
-                ..PlanOptions::for_quality(q, table.as_ref())
+                ..preset
             };
             let (mut plan_ms, mut render_ms, mut frame_ms) = (vec![], vec![], vec![]);
             let mut img = HdrImage::new(frame.width, frame.height);

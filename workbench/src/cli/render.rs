@@ -54,9 +54,10 @@ pub struct RenderArgs {
     #[command(flatten)]
     pub iris: IrisArgs,
     /// Largest factor by which a large, smooth ghost may be drawn coarser than the output
-    /// (a power of two; 1 draws every ghost at full resolution). See docs/performance.md.
-    #[arg(long, default_value_t = ghost_raytrace::plan::MAX_DOWNSCALE, value_parser = parse_downscale)]
-    pub max_downscale: usize,
+    /// (a power of two; 1 draws every ghost at full resolution; the preset's when absent: 16
+    /// for fast, 8 otherwise). See docs/performance.md.
+    #[arg(long, value_parser = parse_downscale)]
+    pub max_downscale: Option<usize>,
     /// Trace the ghosts in f64 instead of f32 (slower; for checking precision).
     #[arg(long)]
     pub f64: bool,
@@ -327,10 +328,11 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
     let lights = scene_lights(sys, &frame, args)?;
     let t = Instant::now();
     let q = args.quality;
+    let preset = PlanOptions::for_quality(q, table.as_ref());
     let opts = PlanOptions {
-        max_downscale: args.max_downscale,
+        max_downscale: args.max_downscale.unwrap_or(preset.max_downscale),
         reflections: args.reflections,
-        ..PlanOptions::for_quality(q, table.as_ref())
+        ..preset
     };
     let mode = args.starburst.starburst;
     let plans = if mode == StarburstMode::Only {
