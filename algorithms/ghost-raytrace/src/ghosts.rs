@@ -241,9 +241,10 @@ impl Targets<'_> {
 /// Draws the ghosts of `groups` (each `(factor, light, ghost)`, coarse groups first; their
 /// contexts `ctxs`) into `targets`, returning each group's ghosts' statistics in its order.
 /// The ghosts' bands of every group are traced and turned into triangles in parallel, in
-/// batches of about [`BATCH_TRIANGLES`]; each batch's coarse groups are rasterized side by
-/// side (each one's tiles in parallel, its triangles in plan order, so the image does not
-/// depend on the number of threads).
+/// batches of about [`BATCH_TRIANGLES`]; each group's meshes of a batch are joined and
+/// rasterized, its tiles in parallel, its triangles in plan order, so the image does not
+/// depend on the number of threads. (Drawing a batch's coarse groups side by side, each
+/// rasterized in parallel, was measured slower: the Heliar's default frame 21 → 25 ms.)
 fn render_groups(
     ctxs: &[GhostContext<'_>],
     plans: &[LightPlan],
