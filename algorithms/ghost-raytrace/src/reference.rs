@@ -173,6 +173,7 @@ pub fn reference_options(reflections: ReflectionOrder) -> PlanOptions<'static> {
         band_spacing_px: REFERENCE_BAND_SPACING_PX,
         cull: false,
         grid_scale: REFERENCE_GRID_SCALE,
+        smooth_grid_scale: 1.0,
         precomputed: None,
         exact_tables: true,
         max_downscale: 1,

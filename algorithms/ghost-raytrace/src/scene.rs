@@ -160,6 +160,30 @@ impl Quality {
         }
     }
 
+    /// Multiplier, with [`Quality::grid_scale`], on a smooth ghost's grid
+    /// (`plan::SMOOTH_GRID`): its triangles cost time by their number more than by their
+    /// pixels. Measured 2026-12-01 (light 10°, 30°, with a table, against the reference;
+    /// docs/performance.md), default preset:
+    ///
+    /// | smooth grid × | Heliar 1920 × 1080 | Nikon zoom 960 × 540 |
+    /// |---|---|---|
+    /// | 1 | 1.882%, 17.5 ms | 1.752% |
+    /// | 0.75 | 1.926%, 13.6–14.5 ms | 1.809% |
+    /// | 0.7 | 1.947% | 1.845% |
+    /// | 0.65 | 1.997% | 1.894% |
+    ///
+    /// At 0.75 the other measured frames, table / traced: Heliar 1920 × 1080 at 20°, 120°
+    /// 1.648% / 1.600%, 960 × 540 at 5°, 0° 1.762% / 1.802% and at 15°, 60° 1.253% / 1.253%;
+    /// the Nikon zoom traced 1.628%. Its 1920 × 1080 default frame went from 563 to 510 ms. The fast
+    /// preset's grids are at their floor already; the high one keeps every grid.
+    pub fn smooth_grid_scale(self) -> f64 {
+        match self {
+            Quality::Fast => 1.0,
+            Quality::Default => 0.75,
+            Quality::High => 1.0,
+        }
+    }
+
     /// Coarse pixels a ghost's radius must span when it is drawn into a coarse frame
     /// (`plan::coarse_factor`): the edge blur this allows touches about 1/this of the ghost's
     /// area. The default is the coarsest that keeps every measured frame within 2% relative
