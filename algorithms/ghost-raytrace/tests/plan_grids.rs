@@ -36,5 +36,8 @@ fn smooth_ghosts_take_three_quarters_of_their_grid() {
             }
         }
     }
-    assert!(smooth > 0 && other > 0, "{smooth} smooth, {other} other ghosts");
+    assert!(
+        smooth > 0 && other > 0,
+        "{smooth} smooth, {other} other ghosts"
+    );
 }
