@@ -42,7 +42,7 @@ use super::enumerate::GhostPath;
 use super::grid::GridTrace;
 use super::render::{
     BandRef, BandTriangles, GhostContext, GhostLight, GhostMesh, GhostStats, SPLIT_MARGIN,
-    grid_triangles, intersect, linear_split, parabola_split, smoothstep, trace_band,
+    grid_triangles, intersect, linear_split, parabola_below, smoothstep, trace_band,
 };
 
 /// Attributes of a fringed triangle's corner: summed RGB irradiance, the clip radius at
@@ -571,7 +571,7 @@ impl Shader<12> for FringeShader<'_> {
                 f64::from(a[6]) + last * f64::from(step[6]),
                 f64::from(a[8]) + last * f64::from(step[8]),
             ));
-            let (within, _) = parabola_split(mu, mv, dmu, dmv, [bounds[0] + reach, 0.0], n);
+            let within = parabola_below(mu, mv, dmu, dmv, n)((bounds[0] + reach).powi(2));
             lit = intersect(lit, within);
         }
         let mut core = core0.start.max(core1.start)..core0.end.min(core1.end);
@@ -587,15 +587,14 @@ impl Shader<12> for FringeShader<'_> {
                     step[7] + step[8],
                 ),
             ] {
-                let (_, inside) = parabola_split(
-                    f64::from(u),
-                    f64::from(v),
-                    f64::from(du),
-                    f64::from(dv),
-                    bounds,
-                    n,
-                );
-                core = intersect(core, if bounds[1] > 0.0 { inside } else { 0..0 });
+                let inside = if bounds[1] > 0.0 {
+                    let below =
+                        parabola_below(f64::from(u), f64::from(v), f64::from(du), f64::from(dv), n);
+                    below(bounds[1] * bounds[1])
+                } else {
+                    0..0
+                };
+                core = intersect(core, inside);
             }
         }
         RowSplit { lit, core }

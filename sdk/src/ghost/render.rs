@@ -763,26 +763,44 @@ pub(crate) fn parabola_split(
     [outer, inner]: [f64; 2],
     n: usize,
 ) -> (std::ops::Range<usize>, std::ops::Range<usize>) {
+    let below = parabola_below(u, v, du, dv, n);
+    (below(outer * outer), below(inner * inner))
+}
+
+/// The pixels `k` in `[0, n)` with `|(u, v) + k (du, dv)|² < t`, as a function of `t` (one
+/// square root a call: where only one of [`parabola_split`]'s two bounds is wanted).
+#[inline]
+pub(crate) fn parabola_below(
+    u: f64,
+    v: f64,
+    du: f64,
+    dv: f64,
+    n: usize,
+) -> impl Fn(f64) -> std::ops::Range<usize> {
     let a2 = du * du + dv * dv;
-    if a2 > 0.0 {
-        // Least at kc, where it is q0: below t for |k − kc| < √((t − q0)/a2).
+    // Least at kc, where it is q0 (the row's own |(u, v)|² where it does not move).
+    let (ia, kc, q0) = if a2 > 0.0 {
         let ia = 1.0 / a2;
         let kc = -(u * du + v * dv) * ia;
         let (pu, pv) = (u + kc * du, v + kc * dv);
-        let q0 = pu * pu + pv * pv;
-        let below = |t: f64| {
+        (ia, kc, pu * pu + pv * pv)
+    } else {
+        (0.0, 0.0, u * u + v * v)
+    };
+    move |t: f64| {
+        if a2 > 0.0 {
+            // Below t for |k − kc| < √((t − q0)/a2).
             if t.is_nan() || q0.is_nan() || t <= q0 {
                 return 0..0;
             }
             let h = ((t - q0) * ia).sqrt();
             after_index(kc - h, n)..ceil_index(kc + h, n)
-        };
-        (below(outer * outer), below(inner * inner))
-    } else {
-        // The row does not move across the stop.
-        let r2 = u * u + v * v;
-        let below = |t: f64| if r2 < t { 0..n } else { 0..0 };
-        (below(outer * outer), below(inner * inner))
+        } else if q0 < t {
+            // The row does not move across the stop.
+            0..n
+        } else {
+            0..0
+        }
     }
 }
 
