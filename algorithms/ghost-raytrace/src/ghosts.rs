@@ -45,7 +45,8 @@ pub struct RenderOptions {
 }
 
 /// Buffers a renderer keeps from frame to frame ([`render_into_reusing`]): the coarse frames,
-/// so that rendering frame after frame does not fault fresh pages in for them.
+/// so that rendering frame after frame does not fault fresh pages in for them (those of the
+/// last frame's size, one per coarse factor).
 #[derive(Debug, Default)]
 pub struct RenderScratch {
     coarse: Vec<HdrImage>,
@@ -178,6 +179,13 @@ pub fn render_into_reusing(
         render_groups(&ctxs, plans, &groups, options, &mut targets)
     };
     scratch.coarse.extend(coarse);
+    // Only what a frame of this size can use again: a resized frame's are let go.
+    scratch.coarse.retain(|img| {
+        (1..=6).any(|k| {
+            let g = CoarseGrid::for_frame(frame.width, frame.height, 1 << k);
+            (g.width, g.height) == (img.width, img.height)
+        })
+    });
     let mut stats: Vec<(usize, usize, GhostStats)> = groups
         .iter()
         .zip(per_ghost)
@@ -209,7 +217,7 @@ pub const FRINGE_GROUP: usize = 8;
 /// with the default frames' gains kept (at 256 they were lost).
 pub const FRINGE_MIN_PIXELS: f64 = 32.0;
 
-/// Triangles (about) made before they are rasterized: bounds the memory a group's meshes
+/// Triangles (about) made before they are rasterized: bounds the memory a batch's meshes
 /// take (about 40 bytes a vertex, 30 MB at this size) while keeping rasterizer calls few.
 const BATCH_TRIANGLES: usize = 1 << 18;
 

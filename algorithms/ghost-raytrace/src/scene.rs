@@ -175,7 +175,7 @@ impl Quality {
     /// At 0.75 the other measured frames, table / traced: Heliar 1920 × 1080 at 20°, 120°
     /// 1.648% / 1.600%, 960 × 540 at 5°, 0° 1.762% / 1.802% and at 15°, 60° 1.253% / 1.253%;
     /// the Nikon zoom traced 1.628%. Its 1920 × 1080 default frame went from 563 to 510 ms. The fast
-    /// preset's grids are at their floor already; the high one keeps every grid.
+    /// preset's grids are at or near their floor already; the high one keeps every grid.
     pub fn smooth_grid_scale(self) -> f64 {
         match self {
             Quality::Fast => 1.0,
@@ -186,8 +186,9 @@ impl Quality {
 
     /// Coarse pixels a ghost's radius must span when it is drawn into a coarse frame
     /// (`plan::coarse_factor`): the edge blur this allows touches about 1/this of the ghost's
-    /// area. The default is the coarsest that keeps every measured frame within 2% relative
-    /// RMSE against the reference, with traced bounds and with a precomputed table.
+    /// area. The default keeps every measured frame within 2% relative RMSE against the
+    /// reference, with traced bounds and with a precomputed table; 80 did too on the Heliar,
+    /// but with no margin (1.990%) and not measured on the Nikon zoom.
     /// Measured 2026-12-01 (against the spectrally converged reference, default preset
     /// otherwise, [`Quality::max_downscale`] 8), table / traced:
     ///
@@ -218,7 +219,7 @@ impl Quality {
     /// change. The fast preset keeps 16: at 8 its frames took 7% (Heliar) and 12% (Nikon) longer.
     pub fn max_downscale(self) -> usize {
         match self {
-            Quality::Fast => 16,
+            Quality::Fast => crate::plan::MAX_DOWNSCALE,
             Quality::Default => 8,
             Quality::High => 8,
         }

@@ -80,3 +80,71 @@ fn a_kept_buffer_replaced_frame_after_frame_holds_each_frame_alone() {
     let ratio = twice.luminance_sum() / once.luminance_sum();
     assert!((ratio - 2.0).abs() < 1e-5, "{ratio}");
 }
+
+#[test]
+fn replacing_covers_two_lights_only_full_resolution_and_no_ghosts() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../lenses/heliar-tronnier.xml"
+    );
+    let sys = read_lens(Path::new(path)).unwrap().system;
+    let frame = Frame::across_film(240, 135, sys.film_width_mm);
+    let aperture = Aperture::Circular;
+    let lights = [
+        LightSpec::parse("10,30").unwrap(),
+        LightSpec::parse("6,200,0.5").unwrap(),
+    ];
+    let preset = PlanOptions::for_quality(Quality::Default, None);
+    let full_only = PlanOptions {
+        max_downscale: 1,
+        ..preset
+    };
+    let mut scratch = RenderScratch::default();
+    let mut kept = HdrImage::new(frame.width, frame.height);
+    let replace = RenderOptions {
+        replace: true,
+        ..Default::default()
+    };
+    for opts in [preset, full_only] {
+        let plans = plan::plan(&sys, &lights, &frame, &opts).unwrap();
+        assert_eq!(plans.len(), 2);
+        let (alone, stats) = ghosts::render(&sys, &aperture, frame, &plans).unwrap();
+        kept.pixels.fill([f32::NAN, 5.0, -2.0]);
+        let kept_stats = ghosts::render_into_reusing(
+            &sys,
+            &aperture,
+            frame,
+            &plans,
+            replace,
+            &mut scratch,
+            &mut kept.pixels,
+        )
+        .unwrap();
+        let c = kept.compare(&alone).unwrap();
+        assert!(c.relative_rmse < SAME_IMAGE_TOL, "{c:?}");
+        // Each light's ghosts' statistics in plan order, whichever group drew them: every
+        // band of a ghost traces its whole grid.
+        for (lp, (s, t)) in plans.iter().zip(stats.iter().zip(&kept_stats)) {
+            assert_eq!(s.len(), lp.ghosts.len());
+            for (job, (a, b)) in lp.ghosts.iter().zip(s.iter().zip(t)) {
+                assert_eq!(a.rays, job.grid * job.grid * job.bands.len());
+                assert_eq!((a.rays, a.triangles), (b.rays, b.triangles));
+            }
+        }
+    }
+    // No ghosts at all: the buffer is made black.
+    let mut empty = plan::plan(&sys, &lights[..1], &frame, &preset).unwrap();
+    empty[0].ghosts.clear();
+    kept.pixels.fill([1.0, f32::NAN, 3.0]);
+    ghosts::render_into_reusing(
+        &sys,
+        &aperture,
+        frame,
+        &empty,
+        replace,
+        &mut scratch,
+        &mut kept.pixels,
+    )
+    .unwrap();
+    assert_eq!(kept, HdrImage::new(frame.width, frame.height));
+}

@@ -571,7 +571,8 @@ impl Shader<12> for FringeShader<'_> {
                 f64::from(a[6]) + last * f64::from(step[6]),
                 f64::from(a[8]) + last * f64::from(step[8]),
             ));
-            let within = parabola_below(mu, mv, dmu, dmv, n)((bounds[0] + reach).powi(2));
+            let outer = bounds[0] + reach;
+            let within = parabola_below(mu, mv, dmu, dmv, n)(outer * outer);
             lit = intersect(lit, within);
         }
         let mut core = core0.start.max(core1.start)..core0.end.min(core1.end);

@@ -259,11 +259,6 @@ impl GhostMesh {
         self.fringe_tables.clear();
     }
 
-    /// True without triangles of any kind.
-    pub fn is_empty(&self) -> bool {
-        self.open.is_empty() && self.edge.is_empty() && self.fringe.is_empty()
-    }
-
     /// Makes room for the triangles of `meshes`.
     pub fn reserve<'a>(&mut self, meshes: impl Iterator<Item = &'a GhostMesh> + Clone) {
         let open: usize = meshes.clone().map(|m| m.open.len()).sum();

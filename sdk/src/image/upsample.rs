@@ -263,7 +263,9 @@ pub fn upsample_levels_into(
                         add_between(row, w0, w1, ty);
                     }
                     if blend == Blend::Replace {
-                        stream_into(out_row, made);
+                        // SAFETY: the block's rows are fenced below, before this closure
+                        // returns (and rayon hands the memory back).
+                        unsafe { stream_into(out_row, made) };
                     }
                 }
                 if blend == Blend::Replace {
@@ -276,7 +278,11 @@ pub fn upsample_levels_into(
 /// Copies `src` into `dst` (the same length) with stores that bypass the cache where the
 /// target has them (x86-64's `movntps`): a frame replaced row by row is written without being
 /// read first, half the memory traffic of an ordinary store's read-for-ownership.
-fn stream_into(dst: &mut [f32], src: &[f32]) {
+///
+/// # Safety
+/// Streaming stores are weakly ordered: the calling thread must call [`stream_fence`] after
+/// it and before `dst` is accessed again (by any thread) — once for many rows is enough.
+unsafe fn stream_into(dst: &mut [f32], src: &[f32]) {
     assert_eq!(dst.len(), src.len(), "same length");
     #[cfg(target_arch = "x86_64")]
     {
@@ -340,7 +346,7 @@ fn add_between(row: &mut [f32], a: &WideRow, b: &WideRow, t: f32) {
 /// `HdrImage::fill_black`).
 const CLEAR_CHUNK: usize = 1 << 15;
 
-/// Output rows per block of [`add_upsampled_levels_into`]'s pass (each block reuses its
+/// Output rows per block of [`upsample_levels_into`]'s pass (each block reuses its
 /// levels' full-width rows).
 const ROWS_PER_BLOCK: usize = 32;
 
@@ -511,7 +517,8 @@ mod tests {
         for start in 0..4 {
             for len in [0, 1, 3, 4, 5, 17, 63] {
                 let mut dst = vec![f32::NAN; 70];
-                stream_into(&mut dst[start..start + len], &src[..len]);
+                // SAFETY: fenced before `dst` is read.
+                unsafe { stream_into(&mut dst[start..start + len], &src[..len]) };
                 stream_fence();
                 assert_eq!(&dst[start..start + len], &src[..len], "{start} {len}");
                 assert!(dst[..start].iter().all(|v| v.is_nan()));
