@@ -16,6 +16,16 @@ pub use upsample::{
 
 use crate::color::srgb::LUMINANCE_WEIGHTS;
 
+/// Makes every pixel of a row-major buffer black, in chunks spread over the cores
+/// ([`HdrImage::fill_black`]; also a replacing upsampling pass with no level).
+pub(crate) fn fill_black(pixels: &mut [[f32; 3]]) {
+    /// Pixels a chunk (384 KB): large enough that handing chunks out costs nothing.
+    const CHUNK: usize = 1 << 15;
+    pixels
+        .par_chunks_mut(CHUNK)
+        .for_each(|chunk| chunk.fill([0.0; 3]));
+}
+
 /// A linear-RGB HDR image. Invariant: `pixels.len() == width * height` (the constructors
 /// ensure it; code that edits the public fields must keep it).
 #[derive(Clone, Debug, PartialEq)]
@@ -101,11 +111,7 @@ impl HdrImage {
     /// frame to frame is cleared (1920 × 1080: 2.0 ms on one core of the machine in
     /// docs/performance.md, 1.6 ms on two — the memory's bandwidth, not the cores, bounds it).
     pub fn fill_black(&mut self) {
-        /// Pixels a chunk (384 KB): large enough that handing chunks out costs nothing.
-        const CHUNK: usize = 1 << 15;
-        self.pixels
-            .par_chunks_mut(CHUNK)
-            .for_each(|chunk| chunk.fill([0.0; 3]));
+        fill_black(&mut self.pixels);
     }
 
     /// The pixel at `(x, y)`, or `None` outside the image.

@@ -179,25 +179,22 @@ pub fn render_into_reusing(
         render_groups(&ctxs, plans, &groups, options, &mut targets)
     };
     scratch.coarse.extend(coarse);
-    // Only what a frame of this size can use again: a resized frame's are let go.
+    // Only what a frame of this size can use again (factors 2 to 64, the largest a plan may
+    // ask for): a resized frame's are let go.
     scratch.coarse.retain(|img| {
         (1..=6).any(|k| {
             let g = CoarseGrid::for_frame(frame.width, frame.height, 1 << k);
             (g.width, g.height) == (img.width, img.height)
         })
     });
-    let mut stats: Vec<(usize, usize, GhostStats)> = groups
-        .iter()
-        .zip(per_ghost)
-        .flat_map(|(group, s)| group.iter().zip(s).map(|(&(_, l, g), s)| (l, g, s)))
-        .collect();
-    stats.sort_by_key(|&(l, g, _)| (l, g));
     let mut per_light: Vec<Vec<GhostStats>> = plans
         .iter()
         .map(|lp| vec![GhostStats::default(); lp.ghosts.len()])
         .collect();
-    for (l, g, s) in stats {
-        per_light[l][g] = s;
+    for (group, stats) in groups.iter().zip(per_ghost) {
+        for (&(_, l, g), s) in group.iter().zip(stats) {
+            per_light[l][g] = s;
+        }
     }
     Ok(per_light)
 }

@@ -176,8 +176,7 @@ pub fn upsample_levels_into(
     }
     if levels.is_empty() {
         if blend == Blend::Replace {
-            dst.par_chunks_mut(CLEAR_CHUNK)
-                .for_each(|chunk| chunk.fill([0.0; 3]));
+            super::fill_black(dst);
         }
         return;
     }
@@ -341,10 +340,6 @@ fn add_between(row: &mut [f32], a: &WideRow, b: &WideRow, t: f32) {
         }
     }
 }
-
-/// Pixels per chunk when a pass with no level clears the buffer (384 KB, as
-/// `HdrImage::fill_black`).
-const CLEAR_CHUNK: usize = 1 << 15;
 
 /// Output rows per block of [`upsample_levels_into`]'s pass (each block reuses its
 /// levels' full-width rows).
