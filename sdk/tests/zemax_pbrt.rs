@@ -447,8 +447,11 @@ fn utf16_big_endian_and_utf8_copies_read_the_same() {
         .map(|c| u16::from_le_bytes([c[0], c[1]]))
         .collect();
     let text = String::from_utf16(&units).unwrap();
-    let dir = std::env::temp_dir().join(format!("flarebench-zmx-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = tempfile::Builder::new()
+        .prefix("flarebench-zmx-")
+        .tempdir()
+        .unwrap();
+    let dir = tmp.path();
     let be: Vec<u8> = b"\xFE\xFF"
         .iter()
         .copied()
@@ -462,7 +465,7 @@ fn utf16_big_endian_and_utf8_copies_read_the_same() {
         assert_eq!(s.surfaces, original.surfaces, "{file}");
         assert_eq!(s.name, original.name, "{file}");
     }
-    std::fs::remove_dir_all(&dir).unwrap();
+    tmp.close().unwrap();
 }
 
 #[test]

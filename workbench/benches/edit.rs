@@ -75,14 +75,16 @@ fn bench(c: &mut Criterion) {
     g.bench_function("draw", |b| {
         b.iter(|| terminal.draw(|f| view::draw(f, &app)).unwrap().area)
     });
-    let dir = std::env::temp_dir().join(format!("flarebench-bench-edit-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let target = dir.join(".nikon-zoom-long.xml.recover");
+    let dir = tempfile::Builder::new()
+        .prefix("flarebench-bench-edit-")
+        .tempdir()
+        .unwrap();
+    let target = dir.path().join(".nikon-zoom-long.xml.recover");
     g.bench_function("recovery_write", |b| {
         b.iter(|| files::write_recovery(&target, app.doc.system()).unwrap())
     });
     g.finish();
-    let _ = std::fs::remove_dir_all(&dir);
+    drop(dir);
 }
 
 criterion_group!(benches, bench);

@@ -157,9 +157,11 @@ mod tests {
 
     #[test]
     fn png_masks_load_with_the_top_row_at_v_plus_one() {
-        let dir = std::env::temp_dir().join(format!("flarebench-mask-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let path = dir.join("half.png");
+        let dir = tempfile::Builder::new()
+            .prefix("flarebench-mask-")
+            .tempdir()
+            .unwrap();
+        let path = dir.path().join("half.png");
         // 4 × 2: the top row open, the bottom closed.
         image::GrayImage::from_raw(4, 2, vec![255, 255, 255, 255, 0, 0, 0, 0])
             .unwrap()
@@ -168,7 +170,7 @@ mod tests {
         let m = load_aperture_mask(&path, MaskEncoding::Transmission)
             .unwrap()
             .mask;
-        std::fs::remove_dir_all(&dir).unwrap();
+        dir.close().unwrap();
         assert_eq!((m.width(), m.height()), (4, 2));
         assert_eq!(m.transmission(0.0, 0.9), 1.0);
         assert_eq!(m.transmission(0.0, -0.9), 0.0);

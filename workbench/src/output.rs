@@ -264,13 +264,13 @@ fn check_size(img: &HdrImage) -> Result<()> {
 mod tests {
     use super::*;
     use std::fs;
-    use std::path::PathBuf;
 
-    fn temp_dir(tag: &str) -> PathBuf {
-        let dir =
-            std::env::temp_dir().join(format!("flarebench-output-{tag}-{}", std::process::id()));
-        fs::create_dir_all(&dir).unwrap();
-        dir
+    /// A fresh directory, removed when the returned `TempDir` is dropped.
+    fn temp_dir(tag: &str) -> tempfile::TempDir {
+        tempfile::Builder::new()
+            .prefix(&format!("flarebench-output-{tag}-"))
+            .tempdir()
+            .unwrap()
     }
 
     /// Values that stress f32: tiny, huge, negative, subnormal, non-round.
@@ -295,7 +295,8 @@ mod tests {
 
     #[test]
     fn exr_round_trips_f32_exactly() {
-        let dir = temp_dir("exr");
+        let tmp = temp_dir("exr");
+        let dir = tmp.path();
         let path = dir.join("flare.exr");
         let img = test_image();
         save_image(&img, &path, &ToneMap::default()).unwrap();
@@ -306,17 +307,18 @@ mod tests {
         }
         // Saving again replaces the file and leaves no temporary behind.
         save_image(&img, &path, &ToneMap::default()).unwrap();
-        let names: Vec<_> = fs::read_dir(&dir)
+        let names: Vec<_> = fs::read_dir(dir)
             .unwrap()
             .map(|e| e.unwrap().file_name())
             .collect();
         assert_eq!(names, vec![std::ffi::OsString::from("flare.exr")]);
-        fs::remove_dir_all(&dir).unwrap();
+        tmp.close().unwrap();
     }
 
     #[test]
     fn half_exr_rounds_to_f16_and_is_smaller() {
-        let dir = temp_dir("exr-half");
+        let tmp = temp_dir("exr-half");
+        let dir = tmp.path();
         let (full, half) = (dir.join("f.exr"), dir.join("h.exr"));
         let img = HdrImage::from_pixels(
             4,
@@ -338,12 +340,13 @@ mod tests {
         assert_eq!(back.pixels[1], [f32::INFINITY, 0.0, 2048.0]);
         assert_eq!(back.pixels[2], [5.960_464_5e-8, 0.333_007_8, 0.5]);
         assert!(fs::metadata(&half).unwrap().len() < fs::metadata(&full).unwrap().len());
-        fs::remove_dir_all(&dir).unwrap();
+        tmp.close().unwrap();
     }
 
     #[test]
     fn png_is_tone_mapped_srgb() {
-        let dir = temp_dir("png");
+        let tmp = temp_dir("png");
+        let dir = tmp.path();
         let path = dir.join("flare.PNG");
         let pixels = vec![
             [0.0, 0.18, 1.0],
@@ -362,7 +365,7 @@ mod tests {
         assert_eq!(back.get_pixel(0, 0).0, [0, 118, 255]);
         assert_eq!(back.get_pixel(1, 0).0, [255, 0, 0]);
         assert_eq!(back.get_pixel(2, 0).0, [188, 7, 255]);
-        fs::remove_dir_all(&dir).unwrap();
+        tmp.close().unwrap();
     }
 
     #[test]

@@ -2,15 +2,15 @@
 
 mod common;
 
-use common::{flarebench, json};
+use common::{flarebench, json, temp_dir};
 use std::path::PathBuf;
 
-fn temp_file(name: &str, text: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("flarebench-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let p = dir.join(name);
+/// Writes `text` to `name` in a fresh directory; the directory goes when the `TempDir` does.
+fn temp_file(name: &str, text: &str) -> (tempfile::TempDir, PathBuf) {
+    let dir = temp_dir("cli");
+    let p = dir.path().join(name);
     std::fs::write(&p, text).unwrap();
-    p
+    (dir, p)
 }
 
 #[test]
@@ -145,7 +145,7 @@ fn a_lens_path_works_like_a_name() {
 
 #[test]
 fn a_bad_file_gives_file_line_and_field_and_no_panic() {
-    let p = temp_file(
+    let (_dir, p) = temp_file(
         "bad.xml",
         "<opticalSystem>\n  <elements>\n    <element>\n      <type>lensSpherical</type>\n      <radius>abc</radius>\n",
     );

@@ -4,7 +4,6 @@
 mod common;
 
 use common::{flarebench, json};
-use std::path::PathBuf;
 
 fn data(file: &str) -> String {
     let dir = if file.ends_with(".dat") {
@@ -15,15 +14,14 @@ fn data(file: &str) -> String {
     format!("{}/../tests/data/{dir}/{file}", env!("CARGO_MANIFEST_DIR"))
 }
 
-fn temp_dir(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("flarebench-convert-{tag}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+fn temp_dir(tag: &str) -> tempfile::TempDir {
+    common::temp_dir(&format!("convert-{tag}"))
 }
 
 #[test]
 fn a_converted_zemax_lens_has_the_same_paraxial_data_as_the_original() {
-    let dir = temp_dir("same");
+    let tmp = temp_dir("same");
+    let dir = tmp.path();
     for file in ["ol_lens1.zmx", "ol_lens_thorlabs_iso_8859_1.zmx"] {
         let out = dir.join(file.replace(".zmx", ".xml"));
         let run = flarebench(&["convert", &data(file), "-o", out.to_str().unwrap()]);
@@ -55,12 +53,13 @@ fn a_converted_zemax_lens_has_the_same_paraxial_data_as_the_original() {
     assert_eq!(v["wavelength_nm"], 780.0);
     // Thorlabs AL1815: f = 15 mm at 780 nm.
     assert!((v["efl_mm"].as_f64().unwrap() - 15.0).abs() < 0.01, "{v}");
-    std::fs::remove_dir_all(&dir).unwrap();
+    tmp.close().unwrap();
 }
 
 #[test]
 fn convert_prints_what_it_approximated() {
-    let dir = temp_dir("warn");
+    let tmp = temp_dir("warn");
+    let dir = tmp.path();
     let out = dir.join("edmund.xml");
     let run = flarebench(&[
         "convert",
@@ -95,12 +94,13 @@ fn convert_prints_what_it_approximated() {
     let run = flarebench(&["convert", &data("ol_lens2.zmx"), "-o", "lens.zmx"]);
     assert!(!run.status.success());
     assert!(String::from_utf8_lossy(&run.stderr).contains("must end in .xml"));
-    std::fs::remove_dir_all(&dir).unwrap();
+    tmp.close().unwrap();
 }
 
 #[test]
 fn refused_files_give_file_line_and_no_output() {
-    let dir = temp_dir("refused");
+    let tmp = temp_dir("refused");
+    let dir = tmp.path();
     let out = dir.join("mirror.xml");
     let run = flarebench(&[
         "convert",
@@ -116,7 +116,7 @@ fn refused_files_give_file_line_and_no_output() {
     );
     assert!(!err.contains("panicked"));
     assert!(!out.exists());
-    std::fs::remove_dir_all(&dir).unwrap();
+    tmp.close().unwrap();
 }
 
 #[test]
@@ -143,7 +143,8 @@ fn config_selects_a_zemax_configuration() {
         "--json",
     ]);
     assert_eq!(t["fate"], "sensor");
-    let dir = temp_dir("config");
+    let tmp = temp_dir("config");
+    let dir = tmp.path();
     let out = dir.join("third.xml");
     let run = flarebench(&[
         "convert",
@@ -156,7 +157,7 @@ fn config_selects_a_zemax_configuration() {
     assert!(run.status.success());
     let v = json(&["info", out.to_str().unwrap(), "--json"]);
     assert!((v["efl_mm"].as_f64().unwrap() - 23.13284498748535).abs() < 1e-6);
-    std::fs::remove_dir_all(&dir).unwrap();
+    tmp.close().unwrap();
 }
 
 #[test]

@@ -18,15 +18,14 @@ use ratatui::Terminal;
 use ratatui::backend::TestBackend;
 use ratatui::crossterm::event::{KeyCode, KeyEvent, KeyModifiers};
 
-/// A fresh directory for one test, holding a copy of the bundled lens `name`.
-fn lens_copy(test: &str, name: &str) -> PathBuf {
-    let dir = common::temp_dir("edit-app").join(test);
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+/// A fresh directory for one test, holding a copy of the bundled lens `name`: the directory
+/// (removed when it is dropped, so the test keeps it) and the copy's path.
+fn lens_copy(test: &str, name: &str) -> (tempfile::TempDir, PathBuf) {
+    let dir = common::temp_dir(&format!("edit-app-{test}"));
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../lenses/{name}.xml"));
-    let dst = dir.join(format!("{name}.xml"));
+    let dst = dir.path().join(format!("{name}.xml"));
     std::fs::copy(src, &dst).unwrap();
-    dst
+    (dir, dst)
 }
 
 fn open(path: &Path) -> App {
@@ -68,13 +67,14 @@ fn efl(app: &App) -> f64 {
 
 #[test]
 fn opening_screen() {
-    let app = open(&lens_copy("opening", "heliar-tronnier"));
+    let (_dir, path) = lens_copy("opening", "heliar-tronnier");
+    let app = open(&path);
     insta::assert_snapshot!("opening", screen(&app));
 }
 
 #[test]
 fn editing_a_thickness_updates_the_analysis() {
-    let path = lens_copy("thickness", "heliar-tronnier");
+    let (_dir, path) = lens_copy("thickness", "heliar-tronnier");
     let mut app = open(&path);
     let before = efl(&app);
     // Down to surface 1, right to the thickness column, edit, clear, type, accept.
@@ -104,7 +104,8 @@ fn editing_a_thickness_updates_the_analysis() {
 
 #[test]
 fn invalid_input_is_shown_and_refused() {
-    let mut app = open(&lens_copy("invalid", "heliar-tronnier"));
+    let (_dir, path) = lens_copy("invalid", "heliar-tronnier");
+    let mut app = open(&path);
     let original = app.doc.system().clone();
     // Radius of surface 0: a typo.
     key(&mut app, KeyCode::F(2));
@@ -130,7 +131,8 @@ fn invalid_input_is_shown_and_refused() {
 
 #[test]
 fn glass_names_complete_from_the_catalogue() {
-    let mut app = open(&lens_copy("glass", "heliar-tronnier"));
+    let (_dir, path) = lens_copy("glass", "heliar-tronnier");
+    let mut app = open(&path);
     for _ in 0..2 {
         key(&mut app, KeyCode::Char('l'));
     }
@@ -154,7 +156,8 @@ fn glass_names_complete_from_the_catalogue() {
 
 #[test]
 fn rows_insert_duplicate_delete_and_move_with_undo() {
-    let mut app = open(&lens_copy("rows", "heliar-tronnier"));
+    let (_dir, path) = lens_copy("rows", "heliar-tronnier");
+    let mut app = open(&path);
     let original = app.doc.system().clone();
     let n = original.surfaces.len();
     key(&mut app, KeyCode::Char('O'));
@@ -195,7 +198,8 @@ fn rows_insert_duplicate_delete_and_move_with_undo() {
 
 #[test]
 fn help_shows_the_key_map() {
-    let mut app = open(&lens_copy("help", "heliar-tronnier"));
+    let (_dir, path) = lens_copy("help", "heliar-tronnier");
+    let mut app = open(&path);
     key(&mut app, KeyCode::Char('?'));
     assert_eq!(app.mode, Mode::Help);
     insta::assert_snapshot!("help", screen(&app));
@@ -205,7 +209,8 @@ fn help_shows_the_key_map() {
 
 #[test]
 fn the_selected_ghost_path_is_traced() {
-    let mut app = open(&lens_copy("ghost", "heliar-tronnier"));
+    let (_dir, path) = lens_copy("ghost", "heliar-tronnier");
+    let mut app = open(&path);
     key(&mut app, KeyCode::Char(']'));
     assert_eq!(app.ghost, Some(0));
     let g = app.analysis.ghosts[0];
@@ -227,7 +232,7 @@ fn the_selected_ghost_path_is_traced() {
 
 #[test]
 fn save_writes_the_file_and_removes_the_recovery_file() {
-    let path = lens_copy("save", "heliar-tronnier");
+    let (_dir, path) = lens_copy("save", "heliar-tronnier");
     let recovery = files::recovery_path(&path);
     assert_eq!(
         recovery.file_name().unwrap(),
@@ -265,7 +270,7 @@ fn save_writes_the_file_and_removes_the_recovery_file() {
 
 #[test]
 fn reopening_offers_recovery() {
-    let path = lens_copy("recover", "heliar-tronnier");
+    let (_dir, path) = lens_copy("recover", "heliar-tronnier");
     let mut app = open(&path);
     key(&mut app, KeyCode::Char('j'));
     key(&mut app, KeyCode::Char('l'));
@@ -289,7 +294,7 @@ fn reopening_offers_recovery() {
 
 #[test]
 fn quitting_with_unsaved_changes_asks() {
-    let path = lens_copy("quit", "heliar-tronnier");
+    let (_dir, path) = lens_copy("quit", "heliar-tronnier");
     let mut app = open(&path);
     assert!(key(&mut app, KeyCode::Char('q')), "nothing to save: quits");
     let mut app = open(&path);
@@ -316,13 +321,13 @@ fn quitting_with_unsaved_changes_asks() {
 
 #[test]
 fn untitled_lenses_ask_where_to_save() {
-    let dir = lens_copy("untitled", "heliar-tronnier");
+    let (dir, _) = lens_copy("untitled", "heliar-tronnier");
     let mut app = App::new(files::open("heliar-tronnier", true).unwrap()).unwrap();
     assert_eq!(app.path, None);
     ctrl(&mut app, 's');
     assert!(matches!(app.mode, Mode::Line { .. }));
     ctrl(&mut app, 'u');
-    let target = dir.with_file_name("mine.xml");
+    let target = dir.path().join("mine.xml");
     keys(&mut app, &target.display().to_string());
     key(&mut app, KeyCode::Enter);
     assert_eq!(app.path.as_deref(), Some(target.as_path()));
@@ -331,7 +336,8 @@ fn untitled_lenses_ask_where_to_save() {
 
 #[test]
 fn header_fields_are_edited_in_the_form() {
-    let mut app = open(&lens_copy("header", "heliar-tronnier"));
+    let (_dir, path) = lens_copy("header", "heliar-tronnier");
+    let mut app = open(&path);
     key(&mut app, KeyCode::Char('k')); // from the table up into the form (f-number)
     assert_eq!(app.focus, Focus::Header(1));
     key(&mut app, KeyCode::Enter);
@@ -345,7 +351,8 @@ fn header_fields_are_edited_in_the_form() {
 
 #[test]
 fn mouse_clicks_select_cells() {
-    let mut app = open(&lens_copy("mouse", "heliar-tronnier"));
+    let (_dir, path) = lens_copy("mouse", "heliar-tronnier");
+    let mut app = open(&path);
     // Table at x 0, y 2; first surface row at y 4; cells start at x 5
     // (border, 3-wide row number, space); thickness is the third column (7 + 1 + 9 + 1).
     dispatch(
@@ -364,7 +371,8 @@ fn mouse_clicks_select_cells() {
 
 #[test]
 fn long_lenses_scroll() {
-    let mut app = open(&lens_copy("scroll", "nikon-zoom-mid"));
+    let (_dir, path) = lens_copy("scroll", "nikon-zoom-mid");
+    let mut app = open(&path);
     dispatch(
         &mut app,
         Action::Resize {

@@ -80,7 +80,10 @@ fn edit_a_cell_save_and_quit_in_a_real_terminal() {
         eprintln!("skipped: tmux is not installed (CI installs it; apt-get install tmux)");
         return;
     }
-    let dir = common::temp_dir("edit-tmux");
+    // Declared before `tmux`, so the directory outlives the tmux server (dropped first, in
+    // reverse order) and the editor it runs.
+    let tmp = common::temp_dir("edit-tmux");
+    let dir = tmp.path();
     let path = dir.join("heliar-tronnier.xml");
     std::fs::copy(
         Path::new(env!("CARGO_MANIFEST_DIR")).join("../lenses/heliar-tronnier.xml"),

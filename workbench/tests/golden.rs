@@ -18,7 +18,8 @@ use flarebench::output::read_exr;
 fn golden(lens: &str) {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/golden");
     let want = dir.join(format!("{lens}.exr"));
-    let out = temp_dir("golden").join(format!("{lens}.exr"));
+    let tmp = temp_dir("golden");
+    let out = tmp.path().join(format!("{lens}.exr"));
     let args = [
         "render",
         lens,

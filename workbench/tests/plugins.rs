@@ -46,7 +46,8 @@ fn plugins_list_shows_the_plugins_beside_the_binary_with_their_parameters() {
 
 #[test]
 fn a_broken_library_on_the_plugin_path_is_listed_with_the_reason() {
-    let dir = temp_dir("plugins-broken");
+    let tmp = temp_dir("plugins-broken");
+    let dir = tmp.path();
     let bad = dir.join(format!(
         "{}not_a_plugin{}",
         std::env::consts::DLL_PREFIX,
@@ -55,7 +56,7 @@ fn a_broken_library_on_the_plugin_path_is_listed_with_the_reason() {
     std::fs::write(&bad, "not a shared library").unwrap();
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_flarebench"))
         .args(["plugins", "list"])
-        .env("FLAREBENCH_PLUGIN_PATH", &dir)
+        .env("FLAREBENCH_PLUGIN_PATH", dir)
         .output()
         .unwrap();
     assert!(out.status.success());
@@ -69,7 +70,8 @@ fn a_broken_library_on_the_plugin_path_is_listed_with_the_reason() {
 fn compare_runs_each_algorithm_and_reports_a_failing_one_without_stopping() {
     beside_binary("example_glow");
     beside_binary("flarebench_test_plugin_faulty");
-    let dir = temp_dir("compare");
+    let tmp = temp_dir("compare");
+    let dir = tmp.path();
     let out_png = dir.join("cmp.png");
     let out = flarebench(&[
         "compare",
@@ -119,7 +121,8 @@ fn compare_runs_each_algorithm_and_reports_a_failing_one_without_stopping() {
 
 #[test]
 fn compare_refuses_an_unknown_plugin_or_parameter_clearly() {
-    let dir = temp_dir("compare-bad");
+    let tmp = temp_dir("compare-bad");
+    let dir = tmp.path();
     let o = dir.join("x.png");
     let out = flarebench(&[
         "compare",
@@ -244,7 +247,8 @@ fn the_starburst_plugin_is_listed_and_runs_in_compare() {
     assert_eq!(s["kind"], "starburst");
     assert_eq!(s["params"][0]["name"], "texels");
 
-    let dir = temp_dir("compare-starburst");
+    let tmp = temp_dir("compare-starburst");
+    let dir = tmp.path();
     let out_png = dir.join("cmp.png");
     let v = json(&[
         "compare",
@@ -420,7 +424,8 @@ fn the_ghost_plugin_renders_a_mask_aperture_and_an_rgb_light_as_the_library_does
 #[test]
 fn compare_runs_the_ghost_plugin_with_an_rgb_light() {
     beside_binary("ghost_raytrace");
-    let dir = temp_dir("compare-rgb");
+    let tmp = temp_dir("compare-rgb");
+    let dir = tmp.path();
     let out_png = dir.join("cmp.png");
     let out = flarebench(&[
         "compare",

@@ -8,7 +8,8 @@ use serde_json::Value;
 
 #[test]
 fn render_writes_an_image_and_reports_what_it_did() {
-    let out = temp_dir("render").join("heliar.exr");
+    let tmp = temp_dir("render");
+    let out = tmp.path().join("heliar.exr");
     let v = json(&[
         "render",
         "heliar-tronnier",
@@ -53,7 +54,8 @@ fn render_writes_an_image_and_reports_what_it_did() {
 
 #[test]
 fn reference_error_is_reported_and_small() {
-    let dir = temp_dir("render-ref");
+    let tmp = temp_dir("render-ref");
+    let dir = tmp.path();
     let out = dir.join("ref.png");
     let saved = dir.join("reference.exr");
     let _ = std::fs::remove_file(&saved);
@@ -96,7 +98,8 @@ fn reference_error_is_reported_and_small() {
 
 #[test]
 fn precomputed_bounds_give_the_same_ghosts() {
-    let dir = temp_dir("render");
+    let tmp = temp_dir("render");
+    let dir = tmp.path();
     let table = dir.join("heliar-bounds.json");
     precompute_heliar_to_12_degrees(&table);
     let run = |extra: &[&str]| -> Value {
@@ -145,7 +148,8 @@ fn precomputed_bounds_give_the_same_ghosts() {
 
 #[test]
 fn bad_render_arguments_are_refused() {
-    let o = temp_dir("render").join("bad.exr");
+    let tmp = temp_dir("render");
+    let o = tmp.path().join("bad.exr");
     let o = o.to_str().unwrap();
     for args in [
         vec!["render", "heliar-tronnier", "--light", "95,0", "-o", o],
@@ -210,7 +214,8 @@ fn bench_times_each_preset_and_reports_what_it_drew() {
 /// table is refused for more than one lens.
 #[test]
 fn bench_plans_from_a_precomputed_table() {
-    let table = temp_dir("bench-table").join("heliar.json");
+    let tmp = temp_dir("bench-table");
+    let table = tmp.path().join("heliar.json");
     precompute_heliar_to_12_degrees(&table);
     let t = table.to_str().unwrap();
     let base = [
@@ -249,7 +254,8 @@ fn bench_plans_from_a_precomputed_table() {
 
 #[test]
 fn a_light_placed_by_its_image_position_images_there() {
-    let out = temp_dir("render").join("at.exr");
+    let tmp = temp_dir("render");
+    let out = tmp.path().join("at.exr");
     let v = json(&[
         "render",
         "heliar-tronnier",
@@ -300,7 +306,8 @@ fn a_light_placed_by_its_image_position_images_there() {
 /// and the two-reflection part of the render is what `--reflections 2` gives.
 #[test]
 fn four_reflection_ghosts_are_rendered_and_reported() {
-    let dir = temp_dir("render");
+    let tmp = temp_dir("render");
+    let dir = tmp.path();
     let run = |extra: &[&str]| -> Value {
         let o = dir.join("four.exr");
         let mut a = vec![
@@ -406,7 +413,8 @@ fn four_reflection_ghosts_are_rendered_and_reported() {
 /// same image as without a table.
 #[test]
 fn precomputed_four_reflection_tables() {
-    let dir = temp_dir("render");
+    let tmp = temp_dir("render");
+    let dir = tmp.path();
     let table = dir.join("heliar-bounds-4.json");
     let v = json(&[
         "precompute",
@@ -467,7 +475,8 @@ fn precomputed_four_reflection_tables() {
 /// octagon gives the same image.
 #[test]
 fn an_aperture_mask_shapes_the_ghosts() {
-    let dir = temp_dir("render-mask");
+    let tmp = temp_dir("render-mask");
+    let dir = tmp.path();
     let out = dir.join("m.exr");
     let sum = |mask: Option<&str>| -> f64 {
         let mut args = vec![
@@ -566,19 +575,20 @@ fn render_heliar(
 
 #[test]
 fn openlensflare_bounds_render_the_heliar_as_our_own_bounds_do() {
-    let dir = temp_dir("render-olf");
+    let tmp = temp_dir("render-olf");
+    let dir = tmp.path();
     let olf = olf_bounds_file();
     let table = dir.join("heliar-bounds.json");
     precompute_heliar_to_12_degrees(&table);
     for light in ["5,0", "10,30"] {
-        let (plain, img_plain) = render_heliar(&dir, "plain", light, &[]);
+        let (plain, img_plain) = render_heliar(dir, "plain", light, &[]);
         let (ours, img_ours) = render_heliar(
-            &dir,
+            dir,
             "ours",
             light,
             &["--precomputed", table.to_str().unwrap()],
         );
-        let (from_olf, img_olf) = render_heliar(&dir, "olf", light, &["--precomputed", &olf]);
+        let (from_olf, img_olf) = render_heliar(dir, "olf", light, &["--precomputed", &olf]);
         let l = &from_olf["lights"][0];
         // Every ghost of the lens is accounted for: the 13 of the file looked up, the 15 that
         // straddle the stop traced and listed.
@@ -627,7 +637,8 @@ const OLF_MAX_ENERGY_GAIN: f64 = 0.005;
 
 #[test]
 fn openlensflare_bounds_for_another_lens_or_corrupted_are_refused_with_their_place() {
-    let dir = temp_dir("render-olf-bad");
+    let tmp = temp_dir("render-olf-bad");
+    let dir = tmp.path();
     let o = dir.join("x.exr");
     let render = |lens: &str, file: &str| {
         flarebench(&[
@@ -693,7 +704,8 @@ fn openlensflare_bounds_for_another_lens_or_corrupted_are_refused_with_their_pla
 /// the same light per colour (measured when written at this size: within 0.004%).
 #[test]
 fn band_by_band_and_fringed_bands_give_the_same_light() {
-    let dir = temp_dir("render-bands");
+    let tmp = temp_dir("render-bands");
+    let dir = tmp.path();
     let out = dir.join("bands.exr");
     let out = out.to_str().unwrap();
     let args = |extra: Option<&'static str>| {

@@ -43,7 +43,8 @@ fn lum(p: [f32; 3]) -> f64 {
 
 #[test]
 fn render_adds_the_starburst_at_the_chief_ray_with_the_lights_flux() {
-    let dir = temp_dir("starburst");
+    let tmp = temp_dir("starburst");
+    let dir = tmp.path();
     let out = dir.join("sb.exr");
     let v = json(&[
         "render",
@@ -129,7 +130,8 @@ fn render_adds_the_starburst_at_the_chief_ray_with_the_lights_flux() {
 
 #[test]
 fn a_background_keeps_its_values_where_the_flare_is_zero() {
-    let dir = temp_dir("starburst-bg");
+    let tmp = temp_dir("starburst-bg");
+    let dir = tmp.path();
     let (w, h) = (160, 90);
     // A background with values no flare could produce, tiny, large, negative, exact.
     let pixels: Vec<[f32; 3]> = (0..w * h)
@@ -222,7 +224,8 @@ fn a_background_keeps_its_values_where_the_flare_is_zero() {
 
 #[test]
 fn half_float_exr_is_the_float_image_rounded() {
-    let dir = temp_dir("starburst-half");
+    let tmp = temp_dir("starburst-half");
+    let dir = tmp.path();
     let (f, h) = (dir.join("f.exr"), dir.join("h.exr"));
     for (path, extra) in [(&f, None), (&h, Some("--exr-half"))] {
         let mut a = vec![
@@ -271,7 +274,8 @@ fn paint_light(img: &mut HdrImage, p: [f64; 2], energy: f32) {
 
 #[test]
 fn apply_finds_synthetic_lights_and_recovers_their_directions() {
-    let dir = temp_dir("apply");
+    let tmp = temp_dir("apply");
+    let dir = tmp.path();
     let (w, h) = (320, 180);
     let f = frame(w, h);
     let known = [
@@ -344,7 +348,8 @@ fn apply_finds_synthetic_lights_and_recovers_their_directions() {
 
 #[test]
 fn apply_on_a_clipped_png_and_with_nothing_bright() {
-    let dir = temp_dir("apply-png");
+    let tmp = temp_dir("apply-png");
+    let dir = tmp.path();
     let (w, h) = (200, 120);
     let f = frame(w, h);
     let p = light_pixel(&f, 5.0, 300.0);

@@ -2,7 +2,6 @@
 
 #![allow(dead_code, reason = "each test binary uses a different subset")]
 
-use std::path::PathBuf;
 use std::process::{Command, Output};
 
 use serde_json::Value;
@@ -26,9 +25,12 @@ pub fn json(args: &[&str]) -> Value {
     serde_json::from_slice(&out.stdout).expect("valid JSON")
 }
 
-/// A directory of this test process for files it writes (`tag` keeps test binaries apart).
-pub fn temp_dir(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("flarebench-{tag}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+/// A fresh directory for the files one test writes, `flarebench-{tag}-…` in the system's
+/// temporary directory. It is removed when the returned `TempDir` is dropped: keep it alive
+/// for as long as the test (and any process it runs) uses `.path()`.
+pub fn temp_dir(tag: &str) -> tempfile::TempDir {
+    tempfile::Builder::new()
+        .prefix(&format!("flarebench-{tag}-"))
+        .tempdir()
+        .unwrap()
 }
