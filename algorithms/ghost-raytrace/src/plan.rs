@@ -26,7 +26,7 @@ use flarebench_sdk::ghost::{
 };
 use flarebench_sdk::trace::InterfaceTableSet;
 use std::collections::HashMap;
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Mutex, OnceLock};
 
 use rayon::prelude::*;
 use serde::Serialize;
@@ -250,7 +250,11 @@ pub fn plan(
         lens_tables,
     } = *opts;
     let paths = enumerate_ghosts_of_order(system, reflections);
-    let tables = InterfaceTableSet::for_system(system, BOUNDS_LAMBDA_NM);
+    // The tables the plan traces bounds with, built only when something is traced (a frame
+    // whose every ghost is looked up in a table needs none).
+    let bounds_tables = OnceLock::new();
+    let tables =
+        || bounds_tables.get_or_init(|| InterfaceTableSet::for_system(system, BOUNDS_LAMBDA_NM));
     let four = reflections == ReflectionOrder::Four;
     // A table lacking some ghost: its bounds are traced, which needs the direct flux.
     let table_lacks =
@@ -264,13 +268,13 @@ pub fn plan(
             let phi = light.phi_deg.to_radians();
             // The direct image's flux: for traced energies, and for the four-reflection bound.
             let direct = (precomputed.is_none() || four || table_lacks)
-                .then(|| bounds::direct_flux(system, &tables, theta, &mut GridTrace::default()));
+                .then(|| bounds::direct_flux(system, tables(), theta, &mut GridTrace::default()));
             // Four-reflection ghosts whose energy bound is under the threshold are left out
             // here, before anything of theirs is traced or looked up.
             let mut bounded_out = Vec::new();
             let candidates: Vec<GhostPath> = match direct {
                 Some(direct) if four && cull => {
-                    let refl = FourReflectionBounds::compute(system, &tables, theta, direct);
+                    let refl = FourReflectionBounds::compute(system, tables(), theta, direct);
                     let threshold = quality.energy_threshold();
                     paths
                         .iter()
@@ -321,7 +325,7 @@ pub fn plan(
                             let b = match (table.ghost_index(p), direct) {
                                 (Some(g), _) => table.lookup(g, light.theta_deg),
                                 (None, Some(direct)) => {
-                                    bounds::precise(system, p, &tables, theta, direct, scratch)
+                                    bounds::precise(system, p, tables(), theta, direct, scratch)
                                 }
                                 // `direct` is traced whenever the table lacks a ghost.
                                 (None, None) => None,
@@ -337,7 +341,7 @@ pub fn plan(
                         .map_init(GridTrace::default, |scratch, &path| {
                             (
                                 path,
-                                bounds::precise(system, path, &tables, theta, direct, scratch),
+                                bounds::precise(system, path, tables(), theta, direct, scratch),
                             )
                         })
                         .collect()
