@@ -185,34 +185,20 @@ pub fn upsample_levels_into(
     // Per level: the norm, the weights along each axis, and per coarse row the columns
     // between its first and last non-zero pixel (ghosts cover a part of a frame: a coarse
     // frame is mostly black, and its black parts add nothing).
-    let setup: Vec<_> = levels
+    let setup: Vec<Level<'_>> = levels
         .iter()
-        .map(|(coarse, grid)| {
-            let spans: Vec<(usize, usize)> = coarse
-                .pixels
-                .par_chunks(grid.width)
-                .map(|row| {
-                    let lit = |p: &[f32; 3]| p.iter().any(|&v| v != 0.0);
-                    match row.iter().position(lit) {
-                        Some(first) => (first, row.iter().rposition(lit).unwrap_or(first) + 1),
-                        None => (0, 0),
-                    }
-                })
-                .collect();
-            let runs = Runs::new(&axis_weights(
+        .map(|(coarse, grid)| Level {
+            coarse,
+            width: grid.width,
+            norm: 1.0 / (grid.factor * grid.factor) as f32,
+            runs: Runs::new(&axis_weights(
                 width,
                 grid.width,
                 grid.factor,
                 grid.offset[0],
-            ));
-            (
-                *coarse,
-                grid.width,
-                1.0 / (grid.factor * grid.factor) as f32,
-                runs,
-                axis_weights(height, grid.height, grid.factor, grid.offset[1]),
-                spans,
-            )
+            )),
+            ys: axis_weights(height, grid.height, grid.factor, grid.offset[1]),
+            spans: coarse.pixels.par_chunks(grid.width).map(lit_span).collect(),
         })
         .collect();
     // Output rows in blocks, each block on one thread: a level's coarse rows are
@@ -221,57 +207,128 @@ pub fn upsample_levels_into(
     // interpolated along y — contiguous f32s, which the compiler vectorizes.
     dst.par_chunks_mut(width * ROWS_PER_BLOCK)
         .enumerate()
-        .for_each_init(
-            || -> (Vec<[WideRow; 2]>, Vec<f32>) {
-                let rows = setup
-                    .iter()
-                    .map(|_| [WideRow::new(width), WideRow::new(width)])
-                    .collect();
-                // Replacing: each row made here (in cache), then streamed out.
-                let made = match blend {
-                    Blend::Replace => vec![0.0; 3 * width],
-                    Blend::Add => Vec::new(),
-                };
-                (rows, made)
-            },
-            |(cache, made), (block, rows)| {
-                for (k, out_row) in rows.chunks_exact_mut(width).enumerate() {
-                    let y = block * ROWS_PER_BLOCK + k;
-                    let out_row = out_row.as_flattened_mut();
-                    let row: &mut [f32] = match blend {
-                        Blend::Replace => {
-                            made.fill(0.0);
-                            made
-                        }
-                        Blend::Add => out_row,
-                    };
-                    for ((coarse, cw, norm, runs, ys, spans), pair) in setup.iter().zip(&mut *cache)
-                    {
-                        let (j0, j1, ty) = ys[y];
-                        if spans[j0].0 >= spans[j0].1 && spans[j1].0 >= spans[j1].1 {
-                            continue;
-                        }
-                        let [w0, w1] = pair;
-                        // Keep whichever cached row is wanted in the first slot.
-                        if w1.row == Some(j0) || w0.row == Some(j1) {
-                            std::mem::swap(w0, w1);
-                        }
-                        let at = |j: usize| &coarse.pixels[j * cw..(j + 1) * cw];
-                        w0.fill(j0, at(j0), spans[j0], runs, *norm);
-                        w1.fill(j1, at(j1), spans[j1], runs, *norm);
-                        add_between(row, w0, w1, ty);
-                    }
-                    if blend == Blend::Replace {
-                        // SAFETY: the block's rows are fenced below, before this closure
-                        // returns (and rayon hands the memory back).
-                        unsafe { stream_into(out_row, made) };
-                    }
-                }
-                if blend == Blend::Replace {
-                    stream_fence();
-                }
-            },
-        );
+        .for_each(|(block, rows)| {
+            BLOCK_BUFFERS.with_borrow_mut(|buffers| {
+                let (cache, made) = buffers.prepare(setup.len(), width, blend);
+                make_block(
+                    &setup,
+                    width,
+                    block * ROWS_PER_BLOCK,
+                    rows,
+                    cache,
+                    made,
+                    blend,
+                );
+            });
+        });
+}
+
+/// One coarse level of an upsampling pass.
+struct Level<'a> {
+    coarse: &'a HdrImage,
+    /// The coarse frame's width.
+    width: usize,
+    /// `1 / factor²`.
+    norm: f32,
+    /// The weights along x, and per output row the coarse rows and weight along y.
+    runs: Runs,
+    ys: Vec<(usize, usize, f32)>,
+    /// Per coarse row, the columns between its first and last non-zero pixel.
+    spans: Vec<(usize, usize)>,
+}
+
+/// Makes the output rows `rows` (whole rows of `width` pixels, the first one row `y0` of the
+/// frame) from `levels`, with `cache` (two full-width rows per level, holding none) and, when
+/// replacing, `made` (a row's floats). Compiled for AVX2 too, chosen at run time: the
+/// interpolation is plain f32 arithmetic (no fused multiply–adds), the same bits either way.
+#[multiversion::multiversion(targets("x86_64+avx2+fma"))]
+fn make_block(
+    levels: &[Level<'_>],
+    width: usize,
+    y0: usize,
+    rows: &mut [[f32; 3]],
+    cache: &mut [[WideRow; 2]],
+    made: &mut [f32],
+    blend: Blend,
+) {
+    for (k, out_row) in rows.chunks_exact_mut(width).enumerate() {
+        let y = y0 + k;
+        let out_row = out_row.as_flattened_mut();
+        let row: &mut [f32] = match blend {
+            Blend::Replace => {
+                made.fill(0.0);
+                &mut *made
+            }
+            Blend::Add => out_row,
+        };
+        for (level, pair) in levels.iter().zip(&mut *cache) {
+            let (j0, j1, ty) = level.ys[y];
+            let spans = &level.spans;
+            if spans[j0].0 >= spans[j0].1 && spans[j1].0 >= spans[j1].1 {
+                continue;
+            }
+            let [w0, w1] = pair;
+            // Keep whichever cached row is wanted in the first slot.
+            if w1.row == Some(j0) || w0.row == Some(j1) {
+                std::mem::swap(w0, w1);
+            }
+            let (pixels, cw) = (&level.coarse.pixels, level.width);
+            let at = |j: usize| &pixels[j * cw..(j + 1) * cw];
+            w0.fill(j0, at(j0), spans[j0], &level.runs, level.norm);
+            w1.fill(j1, at(j1), spans[j1], &level.runs, level.norm);
+            add_between(row, w0, w1, ty);
+        }
+        if blend == Blend::Replace {
+            // SAFETY: the block's rows are fenced below, before this function returns (and
+            // rayon hands the memory back).
+            unsafe { stream_into(out_row, made) };
+        }
+    }
+    if blend == Blend::Replace {
+        stream_fence();
+    }
+}
+
+thread_local! {
+    /// Each thread's buffers for [`upsample_levels_into`]'s blocks, kept from call to call (a
+    /// frame's pass is some 34 blocks; fresh buffers for each were freshly mapped pages,
+    /// zeroed by the kernel, every frame). They grow to the widest frame and the most levels
+    /// a thread has made: for 1920 pixels and three levels, 160 KB.
+    static BLOCK_BUFFERS: std::cell::RefCell<BlockBuffers> =
+        const { std::cell::RefCell::new(BlockBuffers { rows: Vec::new(), made: Vec::new() }) };
+}
+
+/// A block's two cached full-width rows per level, and (replacing) the row being made.
+struct BlockBuffers {
+    rows: Vec<[WideRow; 2]>,
+    made: Vec<f32>,
+}
+
+impl BlockBuffers {
+    /// The buffers for a block of `levels` levels and `width` pixels, every cached row
+    /// forgotten (the coarse frames are another call's, or another block's rows).
+    fn prepare(
+        &mut self,
+        levels: usize,
+        width: usize,
+        blend: Blend,
+    ) -> (&mut [[WideRow; 2]], &mut [f32]) {
+        if self.rows.len() < levels {
+            self.rows
+                .resize_with(levels, || [WideRow::new(0), WideRow::new(0)]);
+        }
+        for w in self.rows.iter_mut().flatten() {
+            w.forget(width);
+        }
+        let made_len = match blend {
+            Blend::Replace => 3 * width,
+            Blend::Add => 0,
+        };
+        if self.made.len() < made_len {
+            self.made.resize(made_len, 0.0);
+        }
+        (&mut self.rows[..levels], &mut self.made[..made_len])
+    }
 }
 
 /// Copies `src` into `dst` (the same length) with stores that bypass the cache where the
@@ -281,6 +338,7 @@ pub fn upsample_levels_into(
 /// # Safety
 /// Streaming stores are weakly ordered: the calling thread must call [`stream_fence`] after
 /// it and before `dst` is accessed again (by any thread) — once for many rows is enough.
+#[inline(always)]
 unsafe fn stream_into(dst: &mut [f32], src: &[f32]) {
     assert_eq!(dst.len(), src.len(), "same length");
     #[cfg(target_arch = "x86_64")]
@@ -313,7 +371,31 @@ fn stream_fence() {
     };
 }
 
+/// The pixels of `row` from its first to its last with a channel that is not zero (`(0, 0)`
+/// when there is none). The floats are tested by their bits, 16 at a time (a value is zero
+/// when all but its sign bit are: `v != 0.0`, NaN included), which the compiler vectorizes:
+/// most of a coarse frame is black and is read only here.
+fn lit_span(row: &[[f32; 3]]) -> (usize, usize) {
+    const CHUNK: usize = 16;
+    let floats = row.as_flattened();
+    let lit = |v: &f32| v.to_bits() << 1 != 0;
+    let any_lit = |c: &[f32]| c.iter().fold(0_u32, |acc, v| acc | (v.to_bits() << 1)) != 0;
+    // The first lit float: past whole black chunks, then one by one.
+    let black = floats.chunks(CHUNK).take_while(|c| !any_lit(c)).count();
+    let head = (black * CHUNK).min(floats.len());
+    let Some(first) = floats[head..].iter().position(lit).map(|k| head + k) else {
+        return (0, 0);
+    };
+    // The last lit float, from the end (which `first` bounds).
+    let rest = &floats[first..];
+    let black_tail = rest.rchunks(CHUNK).take_while(|c| !any_lit(c)).count() * CHUNK;
+    let body = &rest[..rest.len() - black_tail.min(rest.len())];
+    let last = first + body.iter().rposition(lit).unwrap_or(0);
+    (first / 3, last / 3 + 1)
+}
+
 /// Adds `(1 − t) a + t b` to `row`, where `a` and `b` are zero outside their lit ranges.
+#[inline(always)]
 fn add_between(row: &mut [f32], a: &WideRow, b: &WideRow, t: f32) {
     let (la, lb) = (a.lit.clone(), b.lit.clone());
     let both = la.start.max(lb.start)..la.end.min(lb.end);
@@ -358,12 +440,23 @@ impl WideRow {
     fn new(width: usize) -> WideRow {
         WideRow {
             row: None,
-            values: vec![0.0; 3 * width],
+            values: vec![0.0; 3 * width + 1],
             lit: 0..0,
         }
     }
 
+    /// Holds no row, with room for `width` pixels.
+    fn forget(&mut self, width: usize) {
+        self.row = None;
+        self.lit = 0..0;
+        // One float of slack: `fill` writes a pixel's three as four.
+        if self.values.len() < 3 * width + 1 {
+            self.values.resize(3 * width + 1, 0.0);
+        }
+    }
+
     /// Makes this coarse row `j` (`pixels`, lit over columns `span`), unless it already is.
+    #[inline(always)]
     fn fill(
         &mut self,
         j: usize,
@@ -389,11 +482,20 @@ impl WideRow {
                 break;
             }
             let (a, b) = (pixels[r.i0], pixels[r.i1]);
-            let out = self.values[3 * r.x0..3 * r.x1].chunks_exact_mut(3);
-            for (p, &tx) in out.zip(&runs.tx[r.x0..r.x1]) {
-                for c in 0..3 {
-                    p[c] = norm * (a[c] + tx * (b[c] - a[c]));
-                }
+            // `a + tx (b − a)`, scaled, as four lanes (the fourth is zero): each pixel written
+            // by one 16-byte store whose last float the next pixel's store (or the row's
+            // slack) takes.
+            let base = [norm * a[0], norm * a[1], norm * a[2], 0.0];
+            let rise = [
+                norm * (b[0] - a[0]),
+                norm * (b[1] - a[1]),
+                norm * (b[2] - a[2]),
+                0.0,
+            ];
+            let out = &mut self.values[3 * r.x0..3 * r.x1 + 1];
+            for (k, &tx) in runs.tx[r.x0..r.x1].iter().enumerate() {
+                let v: [f32; 4] = std::array::from_fn(|c| base[c] + tx * rise[c]);
+                out[3 * k..3 * k + 4].copy_from_slice(&v);
             }
             start = start.min(3 * r.x0);
             end = 3 * r.x1;
@@ -504,6 +606,32 @@ mod tests {
         let before = fused.clone();
         add_upsampled_levels_into(&mut fused.pixels, w, &[]);
         assert_eq!(fused, before);
+    }
+
+    #[test]
+    fn a_row_s_lit_span_is_its_first_to_last_pixel_with_a_channel_not_zero() {
+        let naive = |row: &[[f32; 3]]| {
+            let lit = |p: &[f32; 3]| p.iter().any(|&v| v != 0.0);
+            match row.iter().position(lit) {
+                Some(first) => (first, row.iter().rposition(lit).unwrap_or(first) + 1),
+                None => (0, 0),
+            }
+        };
+        let odd = [1.0, -0.0, f32::NAN, 1e-45, -3.0, f32::INFINITY];
+        for len in [0, 1, 2, 5, 6, 16, 17, 33, 100] {
+            let mut row = vec![[0.0_f32; 3]; len];
+            assert_eq!(lit_span(&row), naive(&row), "black, {len}");
+            for a in 0..len {
+                for b in [a, (a + 7) % len, len - 1] {
+                    for (k, &v) in odd.iter().enumerate() {
+                        row.fill([0.0; 3]);
+                        row[a][k % 3] = v;
+                        row[b][(k + 1) % 3] = odd[(k + 1) % odd.len()];
+                        assert_eq!(lit_span(&row), naive(&row), "{len} {a} {b} {v}");
+                    }
+                }
+            }
+        }
     }
 
     #[test]
