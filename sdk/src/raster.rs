@@ -133,16 +133,28 @@ pub fn rasterize_into<const N: usize, F>(
 /// rows, a way to say in advance where along a row the shade is zero (those pixels are
 /// skipped) and where it takes a cheaper form ([`Shader::shade_core`]).
 pub trait Shader<const N: usize>: Sync {
+    /// What [`Shader::split_row`] needs of a triangle that is the same on each of its rows
+    /// (reciprocals of its steps, bounds over its corners): made once per point-sampled
+    /// triangle and tile ([`Shader::rows`]).
+    type Rows: Default;
+
     /// The value added at a pixel (times its covered area) with attributes `a`.
     fn shade(&self, a: &[f32; N]) -> [f32; 3];
 
-    /// For a point-sampled row of `n` pixels whose attributes are `a + k · step` at pixel
-    /// `k` (exactly; the rasterizer's f32 values are within a few ulps of that), the pixels
-    /// where [`Shader::shade`] may be non-zero (`lit`; outside it it must be exactly zero) and,
-    /// within them, those where it equals [`Shader::shade_core`] (`core`). The default is the
-    /// whole row, no core.
-    fn split_row(&self, a: &[f32; N], step: &[f32; N], n: usize) -> RowSplit {
-        let _ = (a, step);
+    /// The [`Shader::Rows`] of a triangle whose attributes change by `step` from one pixel to
+    /// the next along x and are `corners` at its corners. The default is the default.
+    fn rows(&self, step: &[f32; N], corners: &[[f32; N]; 3]) -> Self::Rows {
+        let _ = (step, corners);
+        Self::Rows::default()
+    }
+
+    /// For a point-sampled row of `n` pixels of a triangle (`rows`, made by [`Shader::rows`])
+    /// whose attributes are `a + k · step` at pixel `k` (exactly; the rasterizer's f32 values
+    /// are within a few ulps of that), the pixels where [`Shader::shade`] may be non-zero
+    /// (`lit`; outside it it must be exactly zero) and, within them, those where it equals
+    /// [`Shader::shade_core`] (`core`). The default is the whole row, no core.
+    fn split_row(&self, rows: &Self::Rows, a: &[f32; N], step: &[f32; N], n: usize) -> RowSplit {
+        let _ = (rows, a, step);
         RowSplit {
             lit: 0..n,
             core: 0..0,
@@ -170,6 +182,8 @@ impl<const N: usize, F> Shader<N> for FnShader<F>
 where
     F: Fn(&[f32; N]) -> [f32; 3] + Sync,
 {
+    type Rows = ();
+
     #[inline]
     fn shade(&self, a: &[f32; N]) -> [f32; 3] {
         (self.0)(a)
@@ -237,13 +251,10 @@ pub fn rasterize_shaded_into<const N: usize, S: Shader<N>>(
         for &t in bins.tile(view.index) {
             let tri = triangles[t];
             let p = tri.map(|i| positions[i as usize]);
-            let setup = Setup::new(
-                p,
-                tri.map(|i| attrs[i as usize]),
-                [view.x0 as f64, view.y0 as f64],
-            );
+            let corners = tri.map(|i| attrs[i as usize]);
+            let setup = Setup::new(p, corners, [view.x0 as f64, view.y0 as f64]);
             if setup.area >= min_area {
-                sample_in_tile(&mut view, p, &setup, shader);
+                sample_in_tile(&mut view, p, &setup, &corners, shader);
             } else {
                 rasterize_in_tile(&mut view, &setup, shader, &mut scratch);
             }
@@ -585,6 +596,7 @@ fn sample_in_tile<const N: usize, S: Shader<N>>(
     view: &mut TileView<'_>,
     p: [[f32; 2]; 3],
     tri: &Setup<N>,
+    corners: &[[f32; N]; 3],
     shader: &S,
 ) {
     let mut v = p.map(|q| [f64::from(q[0]), f64::from(q[1])]);
@@ -624,6 +636,7 @@ fn sample_in_tile<const N: usize, S: Shader<N>>(
     let step = tri.x_step();
     let step_y = tri.y_step();
     let v0 = tri.v[0];
+    let rows = shader.rows(&step, corners);
     for j in j0..j1 {
         let yc = y0 + j as f64 + 0.5;
         let xa = cross(top, long, yc);
@@ -646,7 +659,7 @@ fn sample_in_tile<const N: usize, S: Shader<N>>(
         };
         let a = at(i0);
         let n = i1 - i0;
-        let split = shader.split_row(&a, &step, n);
+        let split = shader.split_row(&rows, &a, &step, n);
         let (l0, l1) = (split.lit.start.min(n), split.lit.end.min(n));
         if l0 >= l1 {
             continue;

@@ -42,7 +42,8 @@ use super::enumerate::GhostPath;
 use super::grid::GridTrace;
 use super::render::{
     BandRef, BandTriangles, GhostContext, GhostLight, GhostMesh, GhostStats, SPLIT_MARGIN,
-    grid_triangles, intersect, linear_split, parabola_below, smoothstep, trace_band,
+    StepNorm, grid_triangles, intersect, linear_split_with, parabola_below_with, smoothstep,
+    trace_band,
 };
 
 /// Attributes of a fringed triangle's corner: summed RGB irradiance, the clip radius at
@@ -289,6 +290,23 @@ struct Ramp {
     open: f32,
 }
 
+/// What a fringed triangle's rows share ([`FringeShader::split_row`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct FringeRows {
+    /// The clip's outer and inner bounds on the relative radius, with [`SPLIT_MARGIN`].
+    bounds: [f64; 2],
+    /// `1 /` the step along x of the clip radius at either end of τ.
+    inv_radius_step: [f64; 2],
+    /// The stop's outline is drawn (flagged).
+    stop: bool,
+    /// Half the longest segment of the stop crossing over τ, of the triangle's corners.
+    reach: f64,
+    /// The step along x of the segment's middle, and the norms of that step and of its
+    /// ends'.
+    middle_step: [f64; 2],
+    stop_steps: [StepNorm; 3],
+}
+
 /// Shades [`FringeAttrs`] triangles: the summed irradiance times each channel's share of the
 /// ghost's colour over the open interval of `τ`.
 #[derive(Debug)]
@@ -527,10 +545,39 @@ impl FringeShader<'_> {
 }
 
 impl Shader<12> for FringeShader<'_> {
+    type Rows = FringeRows;
+
     #[inline]
     fn shade(&self, a: &FringeAttrs) -> [f32; 3] {
         let s = self.open_share(a);
         [a[0] * s[0], a[1] * s[1], a[2] * s[2]]
+    }
+
+    fn rows(&self, step: &FringeAttrs, corners: &[FringeAttrs; 3]) -> FringeRows {
+        // The feather and the flag are the same at every corner (and so at every pixel).
+        let a = &corners[0];
+        let f = f64::from(a[9]);
+        let (d0, d1) = (f64::from(step[3]), f64::from(step[3] + step[4]));
+        let half = |c: &FringeAttrs| {
+            let (u1, v1) = (f64::from(c[6]), f64::from(c[8]));
+            0.5 * (u1 * u1 + v1 * v1).sqrt()
+        };
+        let (dmu, dmv) = (
+            f64::from(step[5]) + 0.5 * f64::from(step[6]),
+            f64::from(step[7]) + 0.5 * f64::from(step[8]),
+        );
+        FringeRows {
+            bounds: [1.0 + 0.5 * f + SPLIT_MARGIN, 1.0 - 0.5 * f - SPLIT_MARGIN],
+            inv_radius_step: [1.0 / d0, 1.0 / d1],
+            stop: a[10] > 0.5,
+            reach: corners.iter().map(half).fold(0.0, f64::max),
+            middle_step: [dmu, dmv],
+            stop_steps: [
+                StepNorm::new(dmu, dmv),
+                StepNorm::new(f64::from(step[5]), f64::from(step[7])),
+                StepNorm::new(f64::from(step[5] + step[6]), f64::from(step[7] + step[8])),
+            ],
+        }
     }
 
     /// The clip radius over `τ ∈ [0, 1]` lies between `r0` and `r0 + r1`, both affine along the
@@ -538,13 +585,18 @@ impl Shader<12> for FringeShader<'_> {
     /// is flagged, those where the stop crossing's whole segment over τ is beyond the stop's
     /// outer feather — and those where both are within the inner one (and, where the stop is
     /// flagged, both ends of the segment inside the stop's inner feather) wholly open.
-    fn split_row(&self, a: &FringeAttrs, step: &FringeAttrs, n: usize) -> RowSplit {
-        let f = f64::from(a[9]);
-        let bounds = [1.0 + 0.5 * f + SPLIT_MARGIN, 1.0 - 0.5 * f - SPLIT_MARGIN];
+    fn split_row(
+        &self,
+        rows: &FringeRows,
+        a: &FringeAttrs,
+        step: &FringeAttrs,
+        n: usize,
+    ) -> RowSplit {
+        let bounds = rows.bounds;
         let (r0, d0) = (f64::from(a[3]), f64::from(step[3]));
         let (r1, d1) = (f64::from(a[3] + a[4]), f64::from(step[3] + step[4]));
-        let (lit0, core0) = linear_split(r0, d0, bounds, n);
-        let (lit1, core1) = linear_split(r1, d1, bounds, n);
+        let (lit0, core0) = linear_split_with(r0, d0, rows.inv_radius_step[0], bounds, n);
+        let (lit1, core1) = linear_split_with(r1, d1, rows.inv_radius_step[1], bounds, n);
         // Lit where either end is inside (the hull of the two), open where both are.
         let lit = match (lit0.is_empty(), lit1.is_empty()) {
             (true, true) => 0..0,
@@ -553,33 +605,25 @@ impl Shader<12> for FringeShader<'_> {
             (false, false) => lit0.start.min(lit1.start)..lit0.end.max(lit1.end),
         };
         let mut lit = lit;
-        if a[10] > 0.5 && !lit.is_empty() {
+        if rows.stop && !lit.is_empty() {
             // Dark where τ's whole segment of the stop crossing is beyond the stop's outer
-            // feather: its middle farther than that plus its half-length (at most the larger
-            // of the row's ends', the length being convex along the row).
+            // feather: its middle farther than that plus its half-length (at most the
+            // largest of the triangle's corners', the length being convex over it).
             let (mu, mv) = (
                 f64::from(a[5]) + 0.5 * f64::from(a[6]),
                 f64::from(a[7]) + 0.5 * f64::from(a[8]),
             );
-            let (dmu, dmv) = (
-                f64::from(step[5]) + 0.5 * f64::from(step[6]),
-                f64::from(step[7]) + 0.5 * f64::from(step[8]),
-            );
-            let last = n.saturating_sub(1) as f64;
-            let half = |u1: f64, v1: f64| 0.5 * (u1 * u1 + v1 * v1).sqrt();
-            let reach = half(f64::from(a[6]), f64::from(a[8])).max(half(
-                f64::from(a[6]) + last * f64::from(step[6]),
-                f64::from(a[8]) + last * f64::from(step[8]),
-            ));
-            let outer = bounds[0] + reach;
-            let within = parabola_below(mu, mv, dmu, dmv, n)(outer * outer);
+            let [dmu, dmv] = rows.middle_step;
+            let outer = bounds[0] + rows.reach;
+            let within =
+                parabola_below_with(mu, mv, dmu, dmv, rows.stop_steps[0], n)(outer * outer);
             lit = intersect(lit, within);
         }
         let mut core = core0.start.max(core1.start)..core0.end.min(core1.end);
-        if a[10] > 0.5 && !core.is_empty() {
+        if rows.stop && !core.is_empty() {
             // The stop, where both ends of τ's segment are inside it (the disc is convex):
             // each end's `u² + v²` is a parabola along the row.
-            for (u, v, du, dv) in [
+            for ((u, v, du, dv), norm) in [
                 (a[5], a[7], step[5], step[7]),
                 (
                     a[5] + a[6],
@@ -587,10 +631,19 @@ impl Shader<12> for FringeShader<'_> {
                     step[5] + step[6],
                     step[7] + step[8],
                 ),
-            ] {
+            ]
+            .into_iter()
+            .zip(&rows.stop_steps[1..])
+            {
                 let inside = if bounds[1] > 0.0 {
-                    let below =
-                        parabola_below(f64::from(u), f64::from(v), f64::from(du), f64::from(dv), n);
+                    let below = parabola_below_with(
+                        f64::from(u),
+                        f64::from(v),
+                        f64::from(du),
+                        f64::from(dv),
+                        *norm,
+                        n,
+                    );
                     below(bounds[1] * bounds[1])
                 } else {
                     0..0
@@ -1124,7 +1177,11 @@ mod tests {
             step[3] = dr0;
             step[4] = dr1;
             step[5..9].copy_from_slice(&stop_step);
-            let split = shader.split_row(&a, &step, n);
+            // The row as a triangle of its own: its ends as the corners.
+            let end: FringeAttrs =
+                std::array::from_fn(|k| a[k] + (n - 1) as f32 * step[k]);
+            let rows = shader.rows(&step, &[a, end, end]);
+            let split = shader.split_row(&rows, &a, &step, n);
             prop_assert!(split.lit.end <= n && split.core.end <= n);
             let mut x = a;
             for k in 0..n {

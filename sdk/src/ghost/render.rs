@@ -670,6 +670,8 @@ struct EdgeShader<A> {
 pub(crate) const SPLIT_MARGIN: f64 = 1e-4;
 
 impl<A: Fn(f32, f32, f32) -> f32 + Sync> Shader<8> for EdgeShader<A> {
+    type Rows = ();
+
     #[inline]
     fn shade(&self, a: &EdgeAttrs) -> [f32; 3] {
         let feather = a[6];
@@ -685,7 +687,7 @@ impl<A: Fn(f32, f32, f32) -> f32 + Sync> Shader<8> for EdgeShader<A> {
     /// left out, those where every factor is 1 (within `1 − feather/2`) take the open shade,
     /// each up to [`SPLIT_MARGIN`]. An aperture other than the circle keeps the full shade on
     /// flagged triangles.
-    fn split_row(&self, a: &EdgeAttrs, step: &EdgeAttrs, n: usize) -> RowSplit {
+    fn split_row(&self, _: &(), a: &EdgeAttrs, step: &EdgeAttrs, n: usize) -> RowSplit {
         let f = f64::from(a[6]);
         let (outer, inner) = (1.0 + 0.5 * f + SPLIT_MARGIN, 1.0 - 0.5 * f - SPLIT_MARGIN);
         let last = n.saturating_sub(1) as f64;
@@ -728,6 +730,18 @@ pub(crate) fn linear_split(
     [outer, inner]: [f64; 2],
     n: usize,
 ) -> (std::ops::Range<usize>, std::ops::Range<usize>) {
+    linear_split_with(m0, dm, 1.0 / dm, [outer, inner], n)
+}
+
+/// [`linear_split`] with `1 / dm` given (`id`): a triangle's rows share it.
+#[inline]
+pub(crate) fn linear_split_with(
+    m0: f64,
+    dm: f64,
+    id: f64,
+    [outer, inner]: [f64; 2],
+    n: usize,
+) -> (std::ops::Range<usize>, std::ops::Range<usize>) {
     let below = |t: f64| if m0 < t { 0..n } else { 0..0 };
     if dm == 0.0 || dm.is_nan() {
         return (below(outer), below(inner));
@@ -739,7 +753,6 @@ pub(crate) fn linear_split(
     if m0.min(m1) >= outer {
         return (0..0, 0..0);
     }
-    let id = 1.0 / dm;
     let (xl, xc) = ((outer - m0) * id, (inner - m0) * id);
     if dm > 0.0 {
         (0..ceil_index(xl, n), 0..ceil_index(xc, n))
@@ -772,10 +785,40 @@ pub(crate) fn parabola_below(
     dv: f64,
     n: usize,
 ) -> impl Fn(f64) -> std::ops::Range<usize> {
-    let a2 = du * du + dv * dv;
+    parabola_below_with(u, v, du, dv, StepNorm::new(du, dv), n)
+}
+
+/// `|(du, dv)|²` and its reciprocal (0 where it is 0), for [`parabola_below_with`]: a
+/// triangle's rows share their step.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct StepNorm {
+    a2: f64,
+    ia: f64,
+}
+
+impl StepNorm {
+    #[inline]
+    pub(crate) fn new(du: f64, dv: f64) -> StepNorm {
+        let a2 = du * du + dv * dv;
+        StepNorm {
+            a2,
+            ia: if a2 > 0.0 { 1.0 / a2 } else { 0.0 },
+        }
+    }
+}
+
+/// [`parabola_below`] with the step's [`StepNorm`] given.
+#[inline]
+pub(crate) fn parabola_below_with(
+    u: f64,
+    v: f64,
+    du: f64,
+    dv: f64,
+    StepNorm { a2, ia }: StepNorm,
+    n: usize,
+) -> impl Fn(f64) -> std::ops::Range<usize> {
     // Least at kc, where it is q0 (the row's own |(u, v)|² where it does not move).
     let (ia, kc, q0) = if a2 > 0.0 {
-        let ia = 1.0 / a2;
         let kc = -(u * du + v * dv) * ia;
         let (pu, pv) = (u + kc * du, v + kc * dv);
         (ia, kc, pu * pu + pv * pv)
@@ -891,7 +934,7 @@ mod tests {
         n: usize,
         tight: bool,
     ) -> Result<(), TestCaseError> {
-        let split = shader.split_row(&a, &step, n);
+        let split = shader.split_row(&(), &a, &step, n);
         prop_assert!(split.lit.end <= n && split.core.end <= n);
         let mut zeros_inside = 0;
         for k in 0..n {

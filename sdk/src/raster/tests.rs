@@ -407,10 +407,11 @@ fn sampled_coverage_keeps_small_triangles_exact_and_samples_large_ones() {
 fn a_shader_s_row_split_skips_and_cores_pixels() {
     struct Split;
     impl Shader<1> for Split {
+        type Rows = ();
         fn shade(&self, a: &[f32; 1]) -> [f32; 3] {
             [a[0], 1.0, 0.0]
         }
-        fn split_row(&self, a: &[f32; 1], step: &[f32; 1], n: usize) -> RowSplit {
+        fn split_row(&self, _: &(), a: &[f32; 1], step: &[f32; 1], n: usize) -> RowSplit {
             // The attribute is x: lit from x = 2 on, core for 4 ≤ x < 6.
             assert_eq!(step[0], 1.0);
             let from = |x: f32| (x - (a[0] - 0.5)).max(0.0) as usize;
