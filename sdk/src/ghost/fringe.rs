@@ -95,6 +95,9 @@ pub struct FringeTable {
     /// `[M_1, M_2, M_3]` per channel (`M_0` is `F`): with them a smoothstep of a linear
     /// function of `τ` integrates exactly against the colour ([`FringeTable::smooth_share`]).
     moments: Vec<[[f32; 3]; 3]>,
+    /// [`FringeTable::partial_moments`] at 0 and at 1, where a ramp wider than the range
+    /// reads them.
+    ends: [[[f64; 4]; 3]; 2],
 }
 
 impl FringeTable {
@@ -160,7 +163,13 @@ impl FringeTable {
             ]);
             prev = fi;
         }
-        Some(FringeTable { nodes, moments })
+        let mut table = FringeTable {
+            nodes,
+            moments,
+            ends: [[[0.0; 4]; 3]; 2],
+        };
+        table.ends = [table.partial_moments(0.0), table.partial_moments(1.0)];
+        Some(table)
     }
 
     /// Per channel, `M_k(τ) = ∫₀^τ t^k dF(t)` for `k = 0..=3` (`τ` clamped to `[0, 1]`), from
@@ -216,10 +225,17 @@ impl FringeTable {
                 3.0 * q * q - 6.0 * p * q * q,
                 -2.0 * q * q * q,
             ];
-            let (ml, mh) = (
-                self.partial_moments(lo as f32),
-                self.partial_moments(hi as f32),
-            );
+            // (The moments at the range's ends are the table's own.)
+            let at = |t: f64| {
+                if t <= 0.0 {
+                    self.ends[0]
+                } else if t >= 1.0 {
+                    self.ends[1]
+                } else {
+                    self.partial_moments(t as f32)
+                }
+            };
+            let (ml, mh) = (at(lo), at(hi));
             for ((o, h), l) in out.iter_mut().zip(&mh).zip(&ml) {
                 *o += coef[0] * (h[0] - l[0])
                     + coef[1] * (h[1] - l[1])
