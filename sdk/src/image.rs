@@ -10,8 +10,8 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 pub use upsample::{
-    Blend, CoarseGrid, add_upsampled, add_upsampled_into, add_upsampled_levels_into,
-    upsample_levels_into,
+    Blend, CoarseGrid, RowSpans, add_upsampled, add_upsampled_into, add_upsampled_levels_into,
+    row_spans, upsample_levels_into, upsample_spans_into,
 };
 
 use crate::color::srgb::LUMINANCE_WEIGHTS;
@@ -112,6 +112,29 @@ impl HdrImage {
     /// docs/performance.md, 1.6 ms on two — the memory's bandwidth, not the cores, bounds it).
     pub fn fill_black(&mut self) {
         fill_black(&mut self.pixels);
+    }
+
+    /// Makes black the columns `spans[y].0..spans[y].1` of each row `y` (clamped to the
+    /// image; rows in parallel): the whole image when it is black outside them, as after an
+    /// upsampling pass that found them ([`row_spans`]).
+    ///
+    /// # Panics
+    /// If there is not one span a row.
+    pub fn clear_spans(&mut self, spans: &[(usize, usize)]) {
+        assert_eq!(spans.len(), self.height, "one span a row");
+        if self.width == 0 {
+            return;
+        }
+        let width = self.width;
+        self.pixels
+            .par_chunks_mut(width)
+            .zip(spans)
+            .for_each(|(row, &(a, b))| {
+                let b = b.min(width);
+                if a < b {
+                    row[a..b].fill([0.0; 3]);
+                }
+            });
     }
 
     /// The pixel at `(x, y)`, or `None` outside the image.
@@ -259,6 +282,38 @@ mod tests {
 
     fn img(pixels: &[[f32; 3]]) -> HdrImage {
         HdrImage::from_pixels(pixels.len(), 1, pixels.to_vec()).unwrap()
+    }
+
+    #[test]
+    fn clearing_an_image_s_lit_spans_makes_it_black() {
+        let (w, h) = (37, 9);
+        let mut a = HdrImage::new(w, h);
+        for (k, p) in a.pixels.iter_mut().enumerate() {
+            // Sparse rows of scattered pixels, some rows black.
+            if (k * 7919) % 11 < 2 && (k / w) % 3 != 1 {
+                *p = [k as f32, 0.0, 0.5];
+            }
+        }
+        let spans = row_spans(&a);
+        assert_eq!(spans.len(), h);
+        for (y, &(first, end)) in spans.iter().enumerate() {
+            let row = &a.pixels[y * w..(y + 1) * w];
+            let lit: Vec<usize> = (0..w).filter(|&x| row[x] != [0.0; 3]).collect();
+            match (lit.first(), lit.last()) {
+                (Some(&f), Some(&l)) => assert_eq!((first, end), (f, l + 1), "row {y}"),
+                _ => assert_eq!((first, end), (0, 0), "row {y}"),
+            }
+        }
+        assert!(a.pixels.iter().any(|p| *p != [0.0; 3]));
+        a.clear_spans(&spans);
+        assert!(a.pixels.iter().all(|p| *p == [0.0; 3]));
+        // Spans past the width are clamped.
+        let mut b = HdrImage::new(4, 2);
+        b.pixels.fill([1.0; 3]);
+        b.clear_spans(&[(1, 99), (0, 0)]);
+        assert_eq!(b.pixels[0], [1.0; 3]);
+        assert!(b.pixels[1..4].iter().all(|p| *p == [0.0; 3]));
+        assert!(b.pixels[4..].iter().all(|p| *p == [1.0; 3]));
     }
 
     /// Every pixel black, over several chunks and a partial last one.

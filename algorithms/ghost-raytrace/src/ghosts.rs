@@ -19,7 +19,9 @@ use flarebench_sdk::ghost::render::{
     BandRef, Frame, GhostContext, GhostLight, GhostMesh, GhostStats, mesh_ghost,
     rasterize_ghost_mesh_into,
 };
-use flarebench_sdk::image::{Blend, CoarseGrid, HdrImage, upsample_levels_into};
+use flarebench_sdk::image::{
+    Blend, CoarseGrid, HdrImage, RowSpans, row_spans, upsample_spans_into,
+};
 use flarebench_sdk::paraxial::{analyse, stop_opening};
 use flarebench_sdk::spectrum::LAMBDA_D_NM;
 use rayon::prelude::*;
@@ -46,23 +48,25 @@ pub struct RenderOptions {
 
 /// Buffers a renderer keeps from frame to frame ([`render_into_reusing`]): the coarse frames,
 /// so that rendering frame after frame does not fault fresh pages in for them (those of the
-/// last frame's size, one per coarse factor).
+/// last frame's size, one per coarse factor), each with the spans of its rows that frame lit
+/// (found by its upsampling pass), which are all the next frame clears.
 #[derive(Debug, Default)]
 pub struct RenderScratch {
-    coarse: Vec<HdrImage>,
+    coarse: Vec<(HdrImage, RowSpans)>,
 }
 
 impl RenderScratch {
-    /// A black image of `width × height`: a kept one of that size, cleared, or a new one.
+    /// A black image of `width × height`: a kept one of that size, cleared where its last
+    /// frame lit it, or a new one.
     fn take(&mut self, width: usize, height: usize) -> HdrImage {
         match self
             .coarse
             .iter()
-            .position(|i| (i.width, i.height) == (width, height))
+            .position(|(i, _)| (i.width, i.height) == (width, height))
         {
             Some(k) => {
-                let mut img = self.coarse.swap_remove(k);
-                img.fill_black();
+                let (mut img, spans) = self.coarse.swap_remove(k);
+                img.clear_spans(&spans);
                 img
             }
             None => HdrImage::new(width, height),
@@ -163,7 +167,7 @@ pub fn render_into_reusing(
         .iter()
         .map(|g| scratch.take(g.width, g.height))
         .collect();
-    let per_ghost = {
+    let (per_ghost, spans) = {
         let mut targets = Targets {
             grids: &grids,
             coarse: &mut coarse,
@@ -174,14 +178,15 @@ pub fn render_into_reusing(
             } else {
                 Blend::Add
             },
-            upsampled: false,
+            spans: None,
         };
-        render_groups(&ctxs, plans, &groups, options, &mut targets)
+        let per_ghost = render_groups(&ctxs, plans, &groups, options, &mut targets);
+        (per_ghost, targets.spans.unwrap_or_default())
     };
-    scratch.coarse.extend(coarse);
+    scratch.coarse.extend(coarse.into_iter().zip(spans));
     // Only what a frame of this size can use again (factors 2 to 64, the largest a plan may
     // ask for): a resized frame's are let go.
-    scratch.coarse.retain(|img| {
+    scratch.coarse.retain(|(img, _)| {
         (1..=6).any(|k| {
             let g = CoarseGrid::for_frame(frame.width, frame.height, 1 << k);
             (g.width, g.height) == (img.width, img.height)
@@ -228,17 +233,24 @@ struct Targets<'a> {
     out: &'a mut [[f32; 3]],
     width: usize,
     blend: Blend,
-    upsampled: bool,
+    /// Each coarse frame's lit rows, once the upsampling pass has found them.
+    spans: Option<Vec<RowSpans>>,
 }
 
 impl Targets<'_> {
     /// The upsampling pass, once.
     fn upsample(&mut self) {
-        if !self.upsampled {
-            let levels: Vec<(&HdrImage, &CoarseGrid)> =
-                self.coarse.iter().zip(self.grids).collect();
-            upsample_levels_into(self.out, self.width, &levels, self.blend);
-            self.upsampled = true;
+        if self.spans.is_none() {
+            let spans: Vec<RowSpans> = self.coarse.iter().map(row_spans).collect();
+            let levels: Vec<(&HdrImage, &CoarseGrid, &[(usize, usize)])> = self
+                .coarse
+                .iter()
+                .zip(self.grids)
+                .zip(&spans)
+                .map(|((img, grid), spans)| (img, grid, spans.as_slice()))
+                .collect();
+            upsample_spans_into(self.out, self.width, &levels, self.blend);
+            self.spans = Some(spans);
         }
     }
 }

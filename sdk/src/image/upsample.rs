@@ -160,16 +160,50 @@ pub fn upsample_levels_into(
     levels: &[(&HdrImage, &CoarseGrid)],
     blend: Blend,
 ) {
-    for (coarse, grid) in levels {
+    let spans: Vec<RowSpans> = levels.iter().map(|(coarse, _)| row_spans(coarse)).collect();
+    let levels: Vec<_> = levels
+        .iter()
+        .zip(&spans)
+        .map(|(&(coarse, grid), spans)| (coarse, grid, spans.as_slice()))
+        .collect();
+    upsample_spans_into(dst, width, &levels, blend);
+}
+
+/// Per row of an image, the columns `(first, end)` from its first to past its last pixel with
+/// a channel that is not zero (`(0, 0)` for a black row): where an upsampling pass reads it.
+pub type RowSpans = Vec<(usize, usize)>;
+
+/// The [`RowSpans`] of `img` (rows in parallel).
+pub fn row_spans(img: &HdrImage) -> RowSpans {
+    if img.width == 0 {
+        return vec![(0, 0); img.height];
+    }
+    img.pixels.par_chunks(img.width).map(lit_span).collect()
+}
+
+/// [`upsample_levels_into`] with each level's [`RowSpans`] given (its own, or any spans
+/// holding them: what lies outside is not read), as a caller that keeps them does.
+///
+/// # Panics
+/// If a coarse image is not its grid's size, its spans are not one per row, or `dst.len()`
+/// is not a multiple of `width`.
+pub fn upsample_spans_into(
+    dst: &mut [[f32; 3]],
+    width: usize,
+    levels: &[(&HdrImage, &CoarseGrid, &[(usize, usize)])],
+    blend: Blend,
+) {
+    for (coarse, grid, spans) in levels {
         assert_eq!(
             (coarse.width, coarse.height),
             (grid.width, grid.height),
             "the coarse image has the grid's size"
         );
+        assert_eq!(spans.len(), coarse.height, "one span a row");
     }
     let levels: Vec<_> = levels
         .iter()
-        .filter(|(_, g)| g.width > 0 && g.height > 0)
+        .filter(|(_, g, _)| g.width > 0 && g.height > 0)
         .collect();
     if width == 0 || dst.is_empty() {
         return;
@@ -187,7 +221,7 @@ pub fn upsample_levels_into(
     // frame is mostly black, and its black parts add nothing).
     let setup: Vec<Level<'_>> = levels
         .iter()
-        .map(|(coarse, grid)| Level {
+        .map(|(coarse, grid, spans)| Level {
             coarse,
             width: grid.width,
             norm: 1.0 / (grid.factor * grid.factor) as f32,
@@ -198,7 +232,7 @@ pub fn upsample_levels_into(
                 grid.offset[0],
             )),
             ys: axis_weights(height, grid.height, grid.factor, grid.offset[1]),
-            spans: coarse.pixels.par_chunks(grid.width).map(lit_span).collect(),
+            spans,
         })
         .collect();
     // Output rows in blocks, each block on one thread: a level's coarse rows are
@@ -234,7 +268,7 @@ struct Level<'a> {
     runs: Runs,
     ys: Vec<(usize, usize, f32)>,
     /// Per coarse row, the columns between its first and last non-zero pixel.
-    spans: Vec<(usize, usize)>,
+    spans: &'a [(usize, usize)],
 }
 
 /// Makes the output rows `rows` (whole rows of `width` pixels, the first one row `y0` of the
@@ -648,6 +682,28 @@ mod tests {
                 assert!(dst[start + len..].iter().all(|v| v.is_nan()));
             }
         }
+    }
+
+    #[test]
+    fn spans_wider_than_the_lit_ones_give_the_same_image() {
+        let (w, h) = (41, 23);
+        let grid = CoarseGrid::for_frame(w, h, 4);
+        let mut coarse = HdrImage::new(grid.width, grid.height);
+        coarse.pixels[grid.width + 3] = [4.0, 8.0, 16.0];
+        coarse.pixels[3 * grid.width + 7] = [1.0, 0.0, 2.0];
+        let mut own = HdrImage::new(w, h);
+        upsample_levels_into(&mut own.pixels, w, &[(&coarse, &grid)], Blend::Replace);
+        let wide = vec![(0, grid.width); grid.height];
+        let mut wider = HdrImage::new(w, h);
+        wider.pixels.fill([f32::NAN; 3]);
+        upsample_spans_into(
+            &mut wider.pixels,
+            w,
+            &[(&coarse, &grid, &wide)],
+            Blend::Replace,
+        );
+        assert!(own.pixels == wider.pixels);
+        assert!(own.luminance_sum() > 0.0);
     }
 
     #[test]
