@@ -10,8 +10,8 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 pub use upsample::{
-    Blend, CoarseGrid, RowSpans, add_upsampled, add_upsampled_into, add_upsampled_levels_into,
-    row_spans, upsample_levels_into, upsample_spans_into,
+    Blend, CoarseGrid, RowSpans, SpannedLevel, add_upsampled, add_upsampled_into,
+    add_upsampled_levels_into, row_spans, upsample_levels_into, upsample_spans_into,
 };
 
 use crate::color::srgb::LUMINANCE_WEIGHTS;

@@ -20,7 +20,7 @@ use flarebench_sdk::ghost::render::{
     rasterize_ghost_mesh_into,
 };
 use flarebench_sdk::image::{
-    Blend, CoarseGrid, HdrImage, RowSpans, row_spans, upsample_spans_into,
+    Blend, CoarseGrid, HdrImage, RowSpans, SpannedLevel, row_spans, upsample_spans_into,
 };
 use flarebench_sdk::paraxial::{analyse, stop_opening};
 use flarebench_sdk::spectrum::LAMBDA_D_NM;
@@ -242,7 +242,7 @@ impl Targets<'_> {
     fn upsample(&mut self) {
         if self.spans.is_none() {
             let spans: Vec<RowSpans> = self.coarse.iter().map(row_spans).collect();
-            let levels: Vec<(&HdrImage, &CoarseGrid, &[(usize, usize)])> = self
+            let levels: Vec<SpannedLevel<'_>> = self
                 .coarse
                 .iter()
                 .zip(self.grids)

@@ -929,13 +929,37 @@ mod tests {
     #[test]
     fn row_indices_are_ceilings_and_floors_clamped_to_the_row() {
         let xs = [
-            -3.0, -0.5, -0.0, 0.0, 1e-300, 0.25, 0.5, 0.75, 1.0, 1.5, 2.5, 3.5, 7.999_999_9,
-            8.0, 8.000_001, 63.5, 64.0, 64.5, 1e9, 1e30, f64::INFINITY, f64::NAN,
+            -3.0,
+            -0.5,
+            -0.0,
+            0.0,
+            1e-300,
+            0.25,
+            0.5,
+            0.75,
+            1.0,
+            1.5,
+            2.5,
+            3.5,
+            7.999_999_9,
+            8.0,
+            8.000_001,
+            63.5,
+            64.0,
+            64.5,
+            1e9,
+            1e30,
+            f64::INFINITY,
+            f64::NAN,
         ];
         for n in [0, 1, 2, 8, 64, 100] {
             for &x in &xs {
                 let nf = n as f64;
-                let ceil = if x.is_nan() { 0 } else { x.clamp(0.0, nf).ceil() as usize };
+                let ceil = if x.is_nan() {
+                    0
+                } else {
+                    x.clamp(0.0, nf).ceil() as usize
+                };
                 let after = if x.is_nan() {
                     n
                 } else if x < 0.0 {

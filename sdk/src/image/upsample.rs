@@ -181,6 +181,10 @@ pub fn row_spans(img: &HdrImage) -> RowSpans {
     img.pixels.par_chunks(img.width).map(lit_span).collect()
 }
 
+/// A coarse image, its grid and spans of its rows holding every lit pixel (its
+/// [`RowSpans`], or wider ones): a level of [`upsample_spans_into`].
+pub type SpannedLevel<'a> = (&'a HdrImage, &'a CoarseGrid, &'a [(usize, usize)]);
+
 /// [`upsample_levels_into`] with each level's [`RowSpans`] given (its own, or any spans
 /// holding them: what lies outside is not read), as a caller that keeps them does.
 ///
@@ -190,7 +194,7 @@ pub fn row_spans(img: &HdrImage) -> RowSpans {
 pub fn upsample_spans_into(
     dst: &mut [[f32; 3]],
     width: usize,
-    levels: &[(&HdrImage, &CoarseGrid, &[(usize, usize)])],
+    levels: &[SpannedLevel<'_>],
     blend: Blend,
 ) {
     for (coarse, grid, spans) in levels {
