@@ -636,6 +636,9 @@ fn sample_in_tile<const N: usize, S: Shader<N>>(
     let step = tri.x_step();
     let step_y = tri.y_step();
     let v0 = tri.v[0];
+    if j0 >= j1 {
+        return;
+    }
     let rows = shader.rows(&step, corners);
     for j in j0..j1 {
         let yc = y0 + j as f64 + 0.5;

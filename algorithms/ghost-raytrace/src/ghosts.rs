@@ -3,9 +3,10 @@
 //!
 //! Ghosts are grouped by their coarse-frame factor ([`GhostJob::downscale`]): each group is
 //! drawn into a coarse copy of the frame and added to the output by bilinear upsampling, all
-//! coarse frames in one pass (`flarebench_sdk::image::upsample_levels_into`, which may also
-//! replace what the output held); full-resolution ghosts are then drawn straight into the
-//! output. Every ghost's bands are traced and meshed in parallel, in batches that take small
+//! coarse frames in one pass (`flarebench_sdk::image::upsample_spans_into`, which may also
+//! replace what the output held; the coarse rows' lit spans it is given are kept with the
+//! coarse frames, for the next frame to clear only those); full-resolution ghosts are then
+//! drawn straight into the output. Every ghost's bands are traced and meshed in parallel, in batches that take small
 //! groups whole (`render_groups`); each group's meshes of a batch are rasterized in one pass,
 //! its tiles spread over the cores.
 //!

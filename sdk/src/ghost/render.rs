@@ -844,9 +844,10 @@ pub(crate) fn parabola_below_with(
 
 /// `⌈x⌉` clamped to `[0, n]` (0 for NaN), without a libm call or a conversion to an
 /// unsigned integer (each a sequence of instructions on baseline x86-64; a row's split makes
-/// several of these).
+/// several of these). For `n ≤ 2⁵¹` (a row of a tile: [`round_index`]).
 #[inline]
 fn ceil_index(x: f64, n: usize) -> usize {
+    debug_assert!(n <= 1 << 51, "a row of {n} pixels");
     let x = x.clamp(0.0, n as f64);
     if x.is_nan() {
         return 0;
@@ -856,9 +857,11 @@ fn ceil_index(x: f64, n: usize) -> usize {
 }
 
 /// `⌊x⌋ + 1`, the first index above `x`, clamped to `[0, n]` (`n` for NaN: with
-/// [`ceil_index`]'s 0, a NaN bound gives an empty range).
+/// [`ceil_index`]'s 0, a NaN bound gives an empty range). For `n ≤ 2⁵¹`, as
+/// [`ceil_index`].
 #[inline]
 fn after_index(x: f64, n: usize) -> usize {
+    debug_assert!(n <= 1 << 51, "a row of {n} pixels");
     if x < 0.0 {
         return 0;
     }

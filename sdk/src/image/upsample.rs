@@ -185,8 +185,9 @@ pub fn row_spans(img: &HdrImage) -> RowSpans {
 /// [`RowSpans`], or wider ones): a level of [`upsample_spans_into`].
 pub type SpannedLevel<'a> = (&'a HdrImage, &'a CoarseGrid, &'a [(usize, usize)]);
 
-/// [`upsample_levels_into`] with each level's [`RowSpans`] given (its own, or any spans
-/// holding them: what lies outside is not read), as a caller that keeps them does.
+/// [`upsample_levels_into`] with each level's [`RowSpans`] given, as a caller that keeps them
+/// does: its own, or any spans holding them (the pixels outside must be black; the
+/// interpolation at a span's ends reads the black neighbour next to it).
 ///
 /// # Panics
 /// If a coarse image is not its grid's size, its spans are not one per row, or `dst.len()`
@@ -246,18 +247,20 @@ pub fn upsample_spans_into(
     dst.par_chunks_mut(width * ROWS_PER_BLOCK)
         .enumerate()
         .for_each(|(block, rows)| {
-            BLOCK_BUFFERS.with_borrow_mut(|buffers| {
-                let (cache, made) = buffers.prepare(setup.len(), width, blend);
-                make_block(
-                    &setup,
-                    width,
-                    block * ROWS_PER_BLOCK,
-                    rows,
-                    cache,
-                    made,
-                    blend,
-                );
-            });
+            // Out of the thread's cell for the block and back after it (a call made from
+            // inside a block, were there one, would find the cell empty and make its own).
+            let mut buffers = BLOCK_BUFFERS.take();
+            let (cache, made) = buffers.prepare(setup.len(), width, blend);
+            make_block(
+                &setup,
+                width,
+                block * ROWS_PER_BLOCK,
+                rows,
+                cache,
+                made,
+                blend,
+            );
+            BLOCK_BUFFERS.set(buffers);
         });
 }
 
@@ -271,7 +274,8 @@ struct Level<'a> {
     /// The weights along x, and per output row the coarse rows and weight along y.
     runs: Runs,
     ys: Vec<(usize, usize, f32)>,
-    /// Per coarse row, the columns between its first and last non-zero pixel.
+    /// Per coarse row, columns holding every non-zero pixel of it (its first to its last
+    /// lit one, or wider).
     spans: &'a [(usize, usize)],
 }
 
@@ -328,7 +332,7 @@ fn make_block(
 }
 
 thread_local! {
-    /// Each thread's buffers for [`upsample_levels_into`]'s blocks, kept from call to call (a
+    /// Each thread's buffers for [`upsample_spans_into`]'s blocks, kept from call to call (a
     /// frame's pass is some 34 blocks; fresh buffers for each were freshly mapped pages,
     /// zeroed by the kernel, every frame). They grow to the widest frame and the most levels
     /// a thread has made: for 1920 pixels and three levels, 160 KB.
@@ -337,6 +341,7 @@ thread_local! {
 }
 
 /// A block's two cached full-width rows per level, and (replacing) the row being made.
+#[derive(Default)]
 struct BlockBuffers {
     rows: Vec<[WideRow; 2]>,
     made: Vec<f32>,
