@@ -6,9 +6,9 @@
 //! coarse frames in one pass (`flarebench_sdk::image::upsample_spans_into`, which may also
 //! replace what the output held; the coarse rows' lit spans it is given are kept with the
 //! coarse frames, for the next frame to clear only those); full-resolution ghosts are then
-//! drawn straight into the output. Every ghost's bands are traced and meshed in parallel, in batches that take small
-//! groups whole (`render_groups`); each group's meshes of a batch are rasterized in one pass,
-//! its tiles spread over the cores.
+//! drawn straight into the output. Every ghost's bands are traced and meshed in parallel, in
+//! batches that take small groups whole (`render_groups`); each group's meshes of a batch are
+//! rasterized in one pass, its tiles spread over the cores.
 //!
 //! [`GhostJob::downscale`]: crate::plan::GhostJob::downscale
 

@@ -928,7 +928,6 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
-    /// A frame across a film keeps square pixels.
     #[test]
     fn row_indices_are_ceilings_and_floors_clamped_to_the_row() {
         let xs = [
@@ -976,6 +975,7 @@ mod tests {
         }
     }
 
+    /// A frame across a film keeps square pixels.
     #[test]
     fn a_frame_across_a_film_has_square_pixels() {
         let f = Frame::across_film(1920, 1080, 36.0);

@@ -336,8 +336,8 @@ thread_local! {
     /// frame's pass is some 34 blocks; fresh buffers for each were freshly mapped pages,
     /// zeroed by the kernel, every frame). They grow to the widest frame and the most levels
     /// a thread has made: for 1920 pixels and three levels, 160 KB.
-    static BLOCK_BUFFERS: std::cell::RefCell<BlockBuffers> =
-        const { std::cell::RefCell::new(BlockBuffers { rows: Vec::new(), made: Vec::new() }) };
+    static BLOCK_BUFFERS: std::cell::Cell<BlockBuffers> =
+        const { std::cell::Cell::new(BlockBuffers { rows: Vec::new(), made: Vec::new() }) };
 }
 
 /// A block's two cached full-width rows per level, and (replacing) the row being made.
@@ -357,8 +357,7 @@ impl BlockBuffers {
         blend: Blend,
     ) -> (&mut [[WideRow; 2]], &mut [f32]) {
         if self.rows.len() < levels {
-            self.rows
-                .resize_with(levels, || [WideRow::new(0), WideRow::new(0)]);
+            self.rows.resize_with(levels, Default::default);
         }
         for w in self.rows.iter_mut().flatten() {
             w.forget(width);
@@ -473,6 +472,7 @@ const ROWS_PER_BLOCK: usize = 32;
 /// One coarse row interpolated along x to the full width (three f32s a pixel, already
 /// divided by `factor²`): zero outside `lit` (indices into `values`), where `values` holds
 /// whatever an earlier row left and is not read.
+#[derive(Default)]
 struct WideRow {
     row: Option<usize>,
     values: Vec<f32>,
@@ -480,14 +480,6 @@ struct WideRow {
 }
 
 impl WideRow {
-    fn new(width: usize) -> WideRow {
-        WideRow {
-            row: None,
-            values: vec![0.0; 3 * width + 1],
-            lit: 0..0,
-        }
-    }
-
     /// Holds no row, with room for `width` pixels.
     fn forget(&mut self, width: usize) {
         self.row = None;
