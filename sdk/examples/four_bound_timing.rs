@@ -27,14 +27,14 @@ fn main() {
     let sys = read_lens(&p).expect("a bundled lens").system;
     let tables = InterfaceTableSet::for_system(&sys, 550.0);
     let theta = deg.to_radians();
-    let direct = bounds::direct_flux(&sys, &tables, theta, &mut GridTrace::default());
+    let reference = bounds::reference_flux(&sys, &tables, &mut GridTrace::default());
     let paths = enumerate_four_reflection_ghosts(&sys);
     let mut fb = FourReflectionBounds::default();
     let bound_ms = median(
         (0..5)
             .map(|_| {
                 let t = Instant::now();
-                fb = FourReflectionBounds::compute(&sys, &tables, theta, direct);
+                fb = FourReflectionBounds::compute(&sys, &tables, theta, reference);
                 t.elapsed().as_secs_f64() * 1e3
             })
             .collect(),
@@ -50,7 +50,7 @@ fn main() {
                 .map(|_| {
                     let t = Instant::now();
                     list.par_iter().for_each_init(GridTrace::default, |s, &p| {
-                        bounds::precise(&sys, p, &tables, theta, direct, s);
+                        bounds::precise(&sys, p, &tables, theta, reference, s);
                     });
                     t.elapsed().as_secs_f64() * 1e3
                 })

@@ -61,9 +61,9 @@ fn check(stem: &str, degs: &[f64], stride: usize) -> Checked {
     };
     for &deg in degs {
         let theta = deg.to_radians();
-        let direct = bounds::direct_flux(&sys, &tables, theta, &mut scratch);
-        assert!(direct > 0.0, "{stem} {deg}°: no direct image");
-        let fb = FourReflectionBounds::compute(&sys, &tables, theta, direct);
+        let reference = bounds::reference_flux(&sys, &tables, &mut scratch);
+        assert!(reference > 0.0, "{stem}: no on-axis direct image");
+        let fb = FourReflectionBounds::compute(&sys, &tables, theta, reference);
         assert_eq!(fb.len(), paths.len(), "{stem}: every path has a bound");
         let culled = paths.iter().filter(|p| fb.get(p).unwrap() < 1e-6).count();
         out.culled.push(culled as f64 / paths.len() as f64);
@@ -91,12 +91,12 @@ fn check(stem: &str, degs: &[f64], stride: usize) -> Checked {
                 .sum::<f64>()
                 * g.cell_area()
                 * theta.cos()
-                / direct;
+                / reference;
             assert!(
                 on_grid <= bound,
                 "{stem} {deg}° {path}: {on_grid:e} on the bound's grid over the bound {bound:e}"
             );
-            if let Some(b) = bounds::precise(&sys, *path, &tables, theta, direct, &mut scratch) {
+            if let Some(b) = bounds::precise(&sys, *path, &tables, theta, reference, &mut scratch) {
                 out.lit += 1;
                 assert!(
                     b.energy_share <= bound * SAMPLING_TOLERANCE,
@@ -123,7 +123,11 @@ fn the_traced_bound_holds_on_every_lit_four_reflection_path_of_the_small_lenses(
         assert!(c.lit > 100, "{stem}: {c:?}");
         assert!(c.worst >= MIN_WORST_RATIO, "{stem}: {c:?}");
     }
-    // The Heliar at 30° (the Cooke triplet and the double Gauss have no direct image there).
+    // At 30° the Cooke triplet's and the double Gauss's own images are vignetted away, but
+    // their ghosts' energies are measured against the on-axis image and the bound holds.
+    for stem in ["cooke-triplet-25mm", "double-gauss-50mm"] {
+        check(stem, &[30.0], 1);
+    }
     let c = check("heliar-tronnier", &[30.0], 1);
     assert!(c.lit > 50, "{c:?}");
     // It culls most of the Heliar's paths at the default threshold (measured 93.6–95.0% at

@@ -48,8 +48,8 @@ fn frame(sys: &LensSystem, px: usize) -> Frame {
 fn precise_bounds(sys: &LensSystem, path: GhostPath, theta: f64) -> GhostBounds {
     let mut scratch = GridTrace::default();
     let tables = InterfaceTableSet::for_system(sys, 550.0);
-    let direct = bounds::direct_flux(sys, &tables, theta, &mut scratch);
-    bounds::precise(sys, path, &tables, theta, direct, &mut scratch)
+    let reference = bounds::reference_flux(sys, &tables, &mut scratch);
+    bounds::precise(sys, path, &tables, theta, reference, &mut scratch)
         .expect("the ghost reaches the sensor")
 }
 
@@ -339,7 +339,7 @@ fn stiff_cases_stay_finite() {
             let theta = deg.to_radians();
             let mut scratch = GridTrace::default();
             let tables = InterfaceTableSet::for_system(sys, 550.0);
-            let direct = bounds::direct_flux(sys, &tables, theta, &mut scratch);
+            let reference = bounds::reference_flux(sys, &tables, &mut scratch);
             let f = frame(sys, 96);
             let ctx = GhostContext {
                 system: sys,
@@ -357,7 +357,8 @@ fn stiff_cases_stay_finite() {
             let band = Band::new(sys, 450.0, [1.0, 1.0, 1.0]);
             let mut img = HdrImage::new(96, 96);
             for path in enumerate_ghosts(sys).into_iter().step_by(7) {
-                if let Some(b) = bounds::precise(sys, path, &tables, theta, direct, &mut scratch) {
+                if let Some(b) = bounds::precise(sys, path, &tables, theta, reference, &mut scratch)
+                {
                     render_ghost(
                         &ctx,
                         path,

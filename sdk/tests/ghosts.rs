@@ -69,10 +69,10 @@ fn precise_bounds_hold_every_passing_ray_and_are_symmetric_on_axis() {
     let sys = lens("heliar-tronnier");
     let mut scratch = GridTrace::default();
     let tables = InterfaceTableSet::for_system(&sys, 550.0);
-    let direct = bounds::direct_flux(&sys, &tables, 0.0, &mut scratch);
-    assert!(direct > 0.0);
+    let reference = bounds::reference_flux(&sys, &tables, &mut scratch);
+    assert!(reference > 0.0);
     let path = GhostPath::two(4, 3);
-    let b = bounds::precise(&sys, path, &tables, 0.0, direct, &mut scratch)
+    let b = bounds::precise(&sys, path, &tables, 0.0, reference, &mut scratch)
         .expect("ghost 4-3 reaches the sensor");
     let e = b.entrance;
     assert!((e.x0 + e.x1).abs() < 0.05 * e.width(), "{e:?}");
@@ -111,13 +111,13 @@ fn precise_bounds_hold_every_passing_ray_off_axis() {
     let theta = 10f64.to_radians();
     let tables = InterfaceTableSet::for_system(&sys, 550.0);
     let mut scratch = GridTrace::default();
-    let direct = bounds::direct_flux(&sys, &tables, theta, &mut scratch);
+    let reference = bounds::reference_flux(&sys, &tables, &mut scratch);
     let wide = bounds::entrance_search_rect(&sys, theta);
     let n = 241;
     let mut g = GridTrace::default();
     let mut checked = 0;
     for path in enumerate_ghosts(&sys) {
-        let Some(b) = bounds::precise(&sys, path, &tables, theta, direct, &mut scratch) else {
+        let Some(b) = bounds::precise(&sys, path, &tables, theta, reference, &mut scratch) else {
             continue;
         };
         let e = b.entrance;
@@ -143,11 +143,11 @@ fn approximate_bounds_are_close_to_precise_ones_near_the_axis() {
     let mut scratch = GridTrace::default();
     let theta = 2f64.to_radians();
     let tables = InterfaceTableSet::for_system(&sys, 550.0);
-    let direct = bounds::direct_flux(&sys, &tables, theta, &mut scratch);
+    let reference = bounds::reference_flux(&sys, &tables, &mut scratch);
     let mut compared = 0;
     for path in enumerate_ghosts(&sys) {
         let (Some(p), Some(a)) = (
-            bounds::precise(&sys, path, &tables, theta, direct, &mut scratch),
+            bounds::precise(&sys, path, &tables, theta, reference, &mut scratch),
             bounds::approximate(&sys, path, 550.0, theta),
         ) else {
             continue;
@@ -247,7 +247,9 @@ fn four_reflection_paths_are_every_valid_quadruple() {
 }
 
 /// A table computed with four-reflection ghosts holds those whose bound reaches the
-/// threshold, is version 2, round-trips through JSON, and a version-1 table reads as before.
+/// threshold, is version 4, round-trips through JSON, and a version-3 table reads as before;
+/// tables of the old versions 1 and 2 (energies against the direct image at each angle) are
+/// refused with a note to compute them again.
 #[test]
 fn bounds_tables_with_four_reflection_ghosts() {
     use flarebench_sdk::ghost::table::{BoundsTable, TableOptions, VERSION, VERSION_FOUR};
@@ -287,10 +289,10 @@ fn bounds_tables_with_four_reflection_ghosts() {
     // angles, so the lowest-bound path of all is not in it.
     assert!(kept < enumerate_four_reflection_ghosts(&sys).len());
     let text = serde_json::to_string(&four).unwrap();
-    assert!(text.contains(r#""version":2"#) && text.contains(r#""third":"#));
+    assert!(text.contains(r#""version":4"#) && text.contains(r#""third":"#));
     let back: BoundsTable = serde_json::from_str(&text).unwrap();
     assert!(back == four);
-    // A version-1 file with a four-reflection path, or a version-2 file without the threshold,
+    // A version-3 file with a four-reflection path, or a version-4 file without the threshold,
     // is refused.
     let mut bad = four.clone();
     bad.version = VERSION;
@@ -298,14 +300,20 @@ fn bounds_tables_with_four_reflection_ghosts() {
     let mut bad = two.clone();
     bad.version = VERSION_FOUR;
     assert!(bad.check_for(&sys).is_err());
-    // A file written before four-reflection ghosts existed reads as it always did.
+    for (old, table) in [(1, &two), (2, &four)] {
+        let mut stale = table.clone();
+        stale.version = old;
+        let err = stale.check_for(&sys).unwrap_err();
+        assert!(err.contains("run `flarebench precompute` again"), "{err}");
+    }
+    // A version-3 file of two-reflection ghosts reads, and writes back unchanged.
     let fp = flarebench_sdk::ghost::table::fingerprint(&sys);
-    let old = format!(
-        r#"{{"format":"flarebench-ghost-bounds","version":1,"lens":"heliar-tronnier","lens_fingerprint":"{fp}","mode":"approximate","wavelength_nm":550.0,"angles_deg":[0.0],"ghosts":[{{"first":1,"second":0}}],"bounds":[[null]]}}"#
+    let written = format!(
+        r#"{{"format":"flarebench-ghost-bounds","version":3,"lens":"heliar-tronnier","lens_fingerprint":"{fp}","mode":"approximate","wavelength_nm":550.0,"angles_deg":[0.0],"ghosts":[{{"first":1,"second":0}}],"bounds":[[null]]}}"#
     );
-    let t: BoundsTable = serde_json::from_str(&old).unwrap();
+    let t: BoundsTable = serde_json::from_str(&written).unwrap();
     t.check_for(&sys).unwrap();
     assert_eq!(t.ghosts, vec![GhostPath::two(1, 0)]);
     assert!(!t.has_four_reflections());
-    assert_eq!(serde_json::to_string(&t).unwrap(), old);
+    assert_eq!(serde_json::to_string(&t).unwrap(), written);
 }

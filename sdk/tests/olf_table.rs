@@ -87,14 +87,14 @@ fn uncut_entries_carry_the_energy_our_own_bounds_find() {
     let mut checked = 0;
     for (a, &deg) in table.angles_deg.iter().enumerate().take(11).step_by(5) {
         let theta = deg.to_radians();
-        let direct = bounds::direct_flux(&sys, &tables, theta, &mut scratch);
+        let reference = bounds::reference_flux(&sys, &tables, &mut scratch);
         for (g, &path) in table.ghosts.iter().enumerate() {
             let Some(b) = table.bounds[g][a] else {
                 continue;
             };
             if import.cut.contains(&(path, deg)) {
                 // Cut by the file's rectangle: less than ours, never more.
-                let ours = bounds::precise(&sys, path, &tables, theta, direct, &mut scratch)
+                let ours = bounds::precise(&sys, path, &tables, theta, reference, &mut scratch)
                     .unwrap()
                     .energy_share;
                 assert!(
@@ -103,7 +103,7 @@ fn uncut_entries_carry_the_energy_our_own_bounds_find() {
                 );
                 continue;
             }
-            let ours = bounds::precise(&sys, path, &tables, theta, direct, &mut scratch)
+            let ours = bounds::precise(&sys, path, &tables, theta, reference, &mut scratch)
                 .unwrap()
                 .energy_share;
             let rel = b.energy_share / ours - 1.0;

@@ -434,7 +434,7 @@ fn precomputed_four_reflection_tables() {
     assert!(kept > 0 && kept < 658, "{v}");
     assert_eq!(v["ghosts"].as_u64(), Some(28 + kept));
     let text = std::fs::read_to_string(&table).unwrap();
-    assert!(text.contains(r#""version":2"#));
+    assert!(text.contains(r#""version":4"#));
     let run = |extra: &[&str]| -> Value {
         let o = dir.join("p4.exr");
         let mut a = vec![

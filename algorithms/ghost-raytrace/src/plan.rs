@@ -3,7 +3,7 @@
 //!
 //! A ghost is left out when its sensor bounds miss the frame, or when it is among the
 //! dimmest on the frame that together carry at most the quality's budget of the ghosts'
-//! energy ([`dim_threshold`]; a ghost's energy share is its flux over the direct image's,
+//! energy ([`dim_threshold`]; a ghost's energy share is its flux over the on-axis direct image's,
 //! from its bounds). With
 //! [`ReflectionOrder::Four`] the four-reflection ghosts come too, but first each is checked
 //! against an upper bound on its energy share (`FourReflectionBounds`: one grid traced per
@@ -118,7 +118,8 @@ pub struct DroppedGhost {
 }
 
 impl LightPlan {
-    /// Energy share of all ghosts (relative to the direct image) and the part of it left out.
+    /// Energy share of all ghosts (relative to the on-axis direct image) and the part of it
+    /// left out.
     pub fn energy(&self) -> (f64, f64) {
         let kept: f64 = self.ghosts.iter().map(|g| g.energy_share).sum();
         let dropped: f64 = self.dropped.iter().map(|d| d.energy_share).sum();
@@ -256,9 +257,13 @@ pub fn plan(
     let tables =
         || bounds_tables.get_or_init(|| InterfaceTableSet::for_system(system, BOUNDS_LAMBDA_NM));
     let four = reflections == ReflectionOrder::Four;
-    // A table lacking some ghost: its bounds are traced, which needs the direct flux.
+    // A table lacking some ghost: its bounds are traced, which needs the reference flux.
     let table_lacks =
         precomputed.is_some_and(|t| paths.iter().any(|p| t.ghost_index(*p).is_none()));
+    // The flux energy shares are measured against (the on-axis direct image's): for traced
+    // energies, and for the four-reflection bound; the same for every light.
+    let reference = (precomputed.is_none() || four || table_lacks)
+        .then(|| bounds::reference_flux(system, tables(), &mut GridTrace::default()));
     lights
         .iter()
         .map(|light| {
@@ -266,15 +271,12 @@ pub fn plan(
             let colours = GhostColours::new(system, light.spectrum, light.intensity as f32)?;
             let theta = light.theta_deg.to_radians();
             let phi = light.phi_deg.to_radians();
-            // The direct image's flux: for traced energies, and for the four-reflection bound.
-            let direct = (precomputed.is_none() || four || table_lacks)
-                .then(|| bounds::direct_flux(system, tables(), theta, &mut GridTrace::default()));
             // Four-reflection ghosts whose energy bound is under the threshold are left out
             // here, before anything of theirs is traced or looked up.
             let mut bounded_out = Vec::new();
-            let candidates: Vec<GhostPath> = match direct {
-                Some(direct) if four && cull => {
-                    let refl = FourReflectionBounds::compute(system, tables(), theta, direct);
+            let candidates: Vec<GhostPath> = match reference {
+                Some(reference) if four && cull => {
+                    let refl = FourReflectionBounds::compute(system, tables(), theta, reference);
                     let threshold = quality.energy_threshold();
                     paths
                         .iter()
@@ -322,12 +324,12 @@ pub fn plan(
                     candidates
                         .par_iter()
                         .map_init(GridTrace::default, |scratch, &p| {
-                            let b = match (table.ghost_index(p), direct) {
+                            let b = match (table.ghost_index(p), reference) {
                                 (Some(g), _) => table.lookup(g, light.theta_deg),
-                                (None, Some(direct)) => {
-                                    bounds::precise(system, p, tables(), theta, direct, scratch)
+                                (None, Some(reference)) => {
+                                    bounds::precise(system, p, tables(), theta, reference, scratch)
                                 }
-                                // `direct` is traced whenever the table lacks a ghost.
+                                // `reference` is traced whenever the table lacks a ghost.
                                 (None, None) => None,
                             };
                             (p, b)
@@ -335,13 +337,13 @@ pub fn plan(
                         .collect()
                 }
                 None => {
-                    let direct = direct.unwrap_or_default();
+                    let reference = reference.unwrap_or_default();
                     candidates
                         .par_iter()
                         .map_init(GridTrace::default, |scratch, &path| {
                             (
                                 path,
-                                bounds::precise(system, path, tables(), theta, direct, scratch),
+                                bounds::precise(system, path, tables(), theta, reference, scratch),
                             )
                         })
                         .collect()
@@ -607,7 +609,7 @@ fn bracket(lambda_nm: f64, first: f64) -> Option<usize> {
 }
 
 /// The energy share under which ghosts are dim: the dimmest ghosts of `shares` (each ghost's
-/// energy over the direct image's) are dropped, dimmest first, while together they carry at
+/// energy over the on-axis direct image's) are dropped, dimmest first, while together they carry at
 /// most `budget` of the sum of all; the result is the share of the first ghost kept (ghosts
 /// with less are dropped, ties kept together); +∞ when all of them fit the budget (or there
 /// are none).

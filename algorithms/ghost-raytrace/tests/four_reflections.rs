@@ -62,8 +62,8 @@ fn the_plan_culls_four_reflection_ghosts_by_their_bound_before_tracing() {
     // The bound at this light, as the plan finds it.
     let tables = InterfaceTableSet::for_system(&sys, BOUNDS_LAMBDA_NM);
     let theta = 10f64.to_radians();
-    let direct = bounds::direct_flux(&sys, &tables, theta, &mut GridTrace::default());
-    let refl = FourReflectionBounds::compute(&sys, &tables, theta, direct);
+    let reference = bounds::reference_flux(&sys, &tables, &mut GridTrace::default());
+    let refl = FourReflectionBounds::compute(&sys, &tables, theta, reference);
     let bound = |p: &flarebench_sdk::ghost::GhostPath| refl.get(p).unwrap();
     let threshold = q.energy_threshold();
     let s = four.four_reflection_summary();

@@ -112,7 +112,9 @@ pub struct GhostBounds {
     pub grid: usize,
     /// Mean Fresnel/coating throughput of the rays that pass.
     pub mean_intensity: f64,
-    /// The ghost's flux over the direct image's flux at the same angle.
+    /// The ghost's flux over the reference flux ([`reference_flux`]: the direct image's flux
+    /// of the same light on axis), so it stays meaningful where the direct image itself is
+    /// vignetted away (a light just outside the field still makes ghosts).
     pub energy_share: f64,
 }
 
@@ -160,6 +162,19 @@ pub fn direct_flux(
     passing_flux(scratch, theta)
 }
 
+/// The flux every energy share is measured against: the direct image's flux for a light on
+/// axis ([`direct_flux`] at θ = 0), for unit irradiance. It does not depend on the light's
+/// angle, so it never vanishes where the direct image at an oblique angle does (a light just
+/// outside the field, whose image is vignetted away inside the lens while its ghosts still
+/// reach the sensor), and shares at different angles compare directly.
+pub fn reference_flux(
+    system: &LensSystem,
+    tables: &InterfaceTableSet,
+    scratch: &mut GridTrace,
+) -> f64 {
+    direct_flux(system, tables, 0.0, scratch)
+}
+
 /// Σ weight × cell area × cos θ over the passing vertices.
 fn passing_flux(g: &GridTrace, theta: f64) -> f64 {
     let w: f64 = (0..g.n * g.n)
@@ -171,17 +186,17 @@ fn passing_flux(g: &GridTrace, theta: f64) -> f64 {
 
 /// Precise bounds of `path` at `theta` (radians), at the wavelength of `tables` (the lens's
 /// interface tables, built once); `None` when no ray of the ghost reaches the sensor.
-/// `direct` is [`direct_flux`] at the same angle.
+/// `reference` is [`reference_flux`] (energy shares are the ghost's flux over it).
 pub fn precise(
     system: &LensSystem,
     path: GhostPath,
     tables: &InterfaceTableSet,
     theta: f64,
-    direct: f64,
+    reference: f64,
     scratch: &mut GridTrace,
 ) -> Option<GhostBounds> {
     let seq = ghost_sequence(system, path, tables)?;
-    precise_from(system, &seq, theta, direct, None, scratch)
+    precise_from(system, &seq, theta, reference, None, scratch)
 }
 
 /// The f32 sequence of a ghost with its interface tables, as the precise search traces it.
@@ -206,7 +221,7 @@ pub fn precise_from(
     system: &LensSystem,
     seq: &Sequence<f32>,
     theta: f64,
-    direct: f64,
+    reference: f64,
     start: Option<Rect>,
     scratch: &mut GridTrace,
 ) -> Option<GhostBounds> {
@@ -281,7 +296,11 @@ pub fn precise_from(
         sensor,
         grid: grid_for_spread(g),
         mean_intensity,
-        energy_share: if direct > 0.0 { flux / direct } else { 0.0 },
+        energy_share: if reference > 0.0 {
+            flux / reference
+        } else {
+            0.0
+        },
     })
 }
 

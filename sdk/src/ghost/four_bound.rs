@@ -21,7 +21,7 @@
 //! [`bounds::entrance_search_rect`] at the light's angle: the very rays (bit for bit, same f32
 //! sequence steps up to `d`) the precise search of every path starts from
 //! ([`bounds::precise`]). On those rays the bound holds ray by ray, exactly. The bound is the
-//! larger of two sums over that grid, times the cell area × cos θ over the direct flux (the
+//! larger of two sums over that grid, times the cell area × cos θ over the reference flux (the
 //! energy share, as [`bounds::precise`] defines it):
 //!
 //! - the **vertex sum** Σ_v p(v): strict against the path's energy share measured on this
@@ -50,7 +50,7 @@ use super::grid::ProbedGrid;
 /// ([`bounds::precise`] starts from the same rays).
 pub const BOUND_GRID: usize = SEARCH_GRID;
 
-/// Upper bounds on the energy share (flux over the direct image's, as [`bounds::precise`]
+/// Upper bounds on the energy share (flux over the reference flux, as [`bounds::precise`]
 /// measures it) of every four-reflection path of a lens at one incidence angle, at the
 /// wavelength of the interface tables they were computed with.
 #[derive(Clone, Debug, Default)]
@@ -62,14 +62,14 @@ pub struct FourReflectionBounds {
 impl FourReflectionBounds {
     /// Traces every three-reflection prefix `a-b-c` of `system` at `theta` (radians, in the
     /// meridional plane) with `tables` (the lens's interface tables at the bounds'
-    /// wavelength), prefixes in parallel; `direct` is [`bounds::direct_flux`] at the same
-    /// angle (every bound is 0 when it is 0, as energy shares are then). See the module's
-    /// documentation for what is bounded and on which rays.
+    /// wavelength), prefixes in parallel; `reference` is [`bounds::reference_flux`] (every
+    /// bound is 0 when it is 0, as energy shares are then). See the module's documentation
+    /// for what is bounded and on which rays.
     pub fn compute(
         system: &LensSystem,
         tables: &InterfaceTableSet,
         theta: f64,
-        direct: f64,
+        reference: f64,
     ) -> Self {
         let r = reflecting_surfaces(system);
         let mut pairs = Vec::new();
@@ -81,7 +81,7 @@ impl FourReflectionBounds {
         let bounds = pairs
             .par_iter()
             .map_init(ProbedGrid::default, |scratch, &(a, b)| {
-                pair_bounds(system, tables, &r, [a, b], theta, direct, scratch)
+                pair_bounds(system, tables, &r, [a, b], theta, reference, scratch)
             })
             .flatten_iter()
             .collect();
@@ -123,7 +123,7 @@ fn pair_bounds(
     r: &[usize],
     [a, b]: [usize; 2],
     theta: f64,
-    direct: f64,
+    reference: f64,
     scratch: &mut ProbedGrid,
 ) -> Vec<(GhostPath, f64)> {
     let sequence = |start_forward: bool, path: &[(usize, Interaction)]| {
@@ -141,8 +141,8 @@ fn pair_bounds(
     };
     let rect = bounds::entrance_search_rect(system, theta);
     scratch.start(&ab, theta, rect, BOUND_GRID);
-    let scale = if direct > 0.0 {
-        scratch.cell_area() * theta.cos() / direct
+    let scale = if reference > 0.0 {
+        scratch.cell_area() * theta.cos() / reference
     } else {
         0.0
     };

@@ -10,7 +10,7 @@
 //! **Computed here,** because the file's numbers do not mean ours: every visible entry's
 //! rectangle is traced once along our ghost path at 550 nm on a 33² grid, as the precise
 //! bounds' last step is. That gives the energy share (the flux of the rays that pass over the
-//! direct image's, `avgIntensity` being a clamped mean reflectance product — 1 throughout the
+//! on-axis direct image's, [`bounds::reference_flux`]; `avgIntensity` being a clamped mean reflectance product — 1 throughout the
 //! Heliar file), the mean throughput, the sensor rectangle (the landing points of the rays
 //! that pass: OpenLensFlare's sensor rectangles come from another model — flat surfaces
 //! unrefracted, another stop radius — and disagree with where our rays land, e.g. ghost 7-6
@@ -160,18 +160,8 @@ impl BoundsTable {
         let stop = stop_opening(system);
         let tables = InterfaceTableSet::for_system(system, OLF_TRACE_LAMBDA_NM);
         let angles: Vec<f64> = olf.entries.iter().map(|e| e.angle_deg).collect();
-        // The direct image's flux, at the angles where the file shows some ghost.
-        let direct: Vec<f64> = olf
-            .entries
-            .par_iter()
-            .map_init(GridTrace::default, |scratch, e| {
-                if e.ghosts.iter().any(OlfGhostEntry::is_visible) {
-                    bounds::direct_flux(system, &tables, e.angle_deg.to_radians(), scratch)
-                } else {
-                    0.0
-                }
-            })
-            .collect();
+        // The flux energy shares are measured against.
+        let reference = bounds::reference_flux(system, &tables, &mut GridTrace::default());
         // Per ghost (in parallel), per angle: the entry traced over its rectangle.
         let rows: Vec<Vec<(Option<GhostBounds>, EntryNote)>> = paths
             .par_iter()
@@ -180,8 +170,7 @@ impl BoundsTable {
                 let seq = bounds::ghost_sequence(system, path, &tables);
                 olf.entries
                     .iter()
-                    .zip(&direct)
-                    .map(|(e, &direct)| {
+                    .map(|e| {
                         let entry = &e.ghosts[g];
                         let Some(rect) = olf_entrance_on_our_plane(entry, h0, e.angle_deg) else {
                             return (None, EntryNote::Invisible);
@@ -191,7 +180,7 @@ impl BoundsTable {
                         };
                         let theta = e.angle_deg.to_radians();
                         trace_grid(seq, theta, rect, OLF_TRACE_GRID, stop, scratch);
-                        traced_entry(scratch, entry, theta, direct)
+                        traced_entry(scratch, entry, theta, reference)
                     })
                     .collect()
             })
@@ -255,7 +244,7 @@ fn traced_entry(
     g: &GridTrace,
     entry: &OlfGhostEntry,
     theta: f64,
-    direct: f64,
+    reference: f64,
 ) -> (Option<GhostBounds>, EntryNote) {
     let n = g.n;
     let passing: Vec<usize> = (0..n * n).filter(|&k| g.passes(k)).collect();
@@ -279,7 +268,11 @@ fn traced_entry(
         sensor,
         grid,
         mean_intensity: weights / passing.len() as f64,
-        energy_share: if direct > 0.0 { flux / direct } else { 0.0 },
+        energy_share: if reference > 0.0 {
+            flux / reference
+        } else {
+            0.0
+        },
     };
     (
         Some(b),

@@ -21,11 +21,15 @@ use super::grid::GridTrace;
 
 /// Identifies the file format.
 pub const FORMAT: &str = "flarebench-ghost-bounds";
-/// The version of a table of two-reflection ghosts (unchanged since the format began).
-pub const VERSION: u32 = 1;
-/// The version of a table computed with four-reflection ghosts: a reader of version 1 would
-/// misread their paths, so it must refuse them.
-pub const VERSION_FOUR: u32 = 2;
+/// The version of a table of two-reflection ghosts.
+pub const VERSION: u32 = 3;
+/// The version of a table computed with four-reflection ghosts: a reader of [`VERSION`]
+/// tables would misread their paths, so it must refuse them.
+pub const VERSION_FOUR: u32 = 4;
+/// Versions 1 (two reflections) and 2 (four) measured energy shares against the direct
+/// image at each angle, which vanishes where that image is vignetted away: they are refused
+/// with a note to compute the table again.
+const OLD_VERSIONS: [u32; 2] = [1, 2];
 
 /// Ghost bounds per ghost and angle.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -44,10 +48,10 @@ pub struct BoundsTable {
     /// `bounds[g][a]`: ghost `g` at angle `a`; `None` where no ray of it reaches the sensor.
     pub bounds: Vec<Vec<Option<GhostBounds>>>,
     /// Set when four-reflection ghosts were considered: those whose energy bound is below
-    /// this at every tabulated angle are not in the table (version 2 files only).
+    /// this at every tabulated angle are not in the table (version 4 files only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub four_reflection_bound_threshold: Option<f64>,
-    /// How many four-reflection paths the lens has (in the table or not; version 2 only).
+    /// How many four-reflection paths the lens has (in the table or not; version 4 only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub four_reflection_paths: Option<usize>,
 }
@@ -123,16 +127,11 @@ impl BoundsTable {
         let four = options.reflections == ReflectionOrder::Four;
         let mut ghosts = enumerate_ghosts(system);
         let tables = InterfaceTableSet::for_system(system, wavelength_nm);
-        // The direct flux: for the precise energies, and for the four-reflection bound.
-        let direct: Vec<f64> = if mode == BoundsMode::Precise || four {
-            angles_deg
-                .par_iter()
-                .map_init(GridTrace::default, |scratch, &deg| {
-                    bounds::direct_flux(system, &tables, deg.to_radians(), scratch)
-                })
-                .collect()
+        // The reference flux: for the precise energies, and for the four-reflection bound.
+        let reference = if mode == BoundsMode::Precise || four {
+            bounds::reference_flux(system, &tables, &mut GridTrace::default())
         } else {
-            vec![0.0; angles_deg.len()]
+            0.0
         };
         let mut four_paths = None;
         if four {
@@ -140,8 +139,9 @@ impl BoundsTable {
             // threshold at some tabulated angle.
             let all = enumerate_four_reflection_ghosts(system);
             let mut largest = vec![0.0f64; all.len()];
-            for (&deg, &d) in angles_deg.iter().zip(&direct) {
-                let at = FourReflectionBounds::compute(system, &tables, deg.to_radians(), d);
+            for &deg in angles_deg {
+                let at =
+                    FourReflectionBounds::compute(system, &tables, deg.to_radians(), reference);
                 for (l, p) in largest.iter_mut().zip(&all) {
                     // Every path of the lens has a bound; keep one that had none.
                     *l = l.max(at.get(p).unwrap_or(f64::INFINITY));
@@ -156,10 +156,6 @@ impl BoundsTable {
             );
         }
         start(ghosts.len());
-        let direct_for_energy: Vec<f64> = match mode {
-            BoundsMode::Precise => direct,
-            BoundsMode::Approximate => vec![0.0; angles_deg.len()],
-        };
         // Ghosts in parallel; within a ghost, angles in order, each search starting from the
         // previous angle's rectangle.
         let bounds: Vec<Vec<Option<GhostBounds>>> = ghosts
@@ -169,13 +165,12 @@ impl BoundsTable {
                 let seq = bounds::ghost_sequence(system, g, &tables);
                 let row: Vec<Option<GhostBounds>> = angles_deg
                     .iter()
-                    .zip(&direct_for_energy)
-                    .map(|(&deg, &direct)| {
+                    .map(|&deg| {
                         let theta = deg.to_radians();
                         let b = match mode {
                             BoundsMode::Precise => seq.as_ref().and_then(|seq| {
                                 let start = prev.map(|p| p.entrance);
-                                bounds::precise_from(system, seq, theta, direct, start, scratch)
+                                bounds::precise_from(system, seq, theta, reference, start, scratch)
                             }),
                             BoundsMode::Approximate => {
                                 bounds::approximate(system, g, wavelength_nm, theta)
@@ -218,6 +213,14 @@ impl BoundsTable {
             VERSION_FOUR => self.has_four_reflections(),
             _ => false,
         };
+        if self.format == FORMAT && OLD_VERSIONS.contains(&self.version) {
+            return Err(format!(
+                "a {FORMAT} v{} file, whose energy shares are relative to the direct image at \
+                 each angle (this version measures them against the on-axis direct image): \
+                 run `flarebench precompute` again",
+                self.version
+            ));
+        }
         if self.format != FORMAT || !known {
             return Err(format!(
                 "not a {FORMAT} v{VERSION} or v{VERSION_FOUR} file (format `{}`, version {})",
