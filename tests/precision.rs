@@ -7,7 +7,7 @@ use flarebench_sdk::trace::{Fate, Ray, RayBatch, Sequence};
 use flarebench_tests::{library_stems, load_lens};
 
 /// Bound on |landing(f32) − landing(f64)| on the sensor, relative to the EFL. Measured worst
-/// case over the library (2026-11-24): 1.34e-6 × EFL (Laikin wide angle), most lenses 1e-7 to
+/// case over the library: 1.34e-6 × EFL (Laikin wide angle), most lenses 1e-7 to
 /// 9e-7; the bound leaves 3× headroom. For a 50 mm lens that is 0.2 µm, far below a pixel.
 const MAX_RELATIVE_LANDING_ERROR: f64 = 4e-6;
 

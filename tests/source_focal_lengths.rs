@@ -80,13 +80,13 @@ const SOURCE_EFL: &[(&str, f64, f64, &str)] = &[
         "nikon-zoom-mid",
         93.0,
         0.5,
-        "DESIGN.md §2: Nikon zoom mid traces to about 93 mm",
+        "lenses/README.md: Nikon zoom mid traces to about 93 mm",
     ),
     (
         "nikon-zoom-long",
         143.0,
         0.5,
-        "DESIGN.md §2: Nikon zoom long traces to about 143 mm",
+        "lenses/README.md: Nikon zoom long traces to about 143 mm",
     ),
     (
         "kreitzer-tele",

@@ -11,7 +11,7 @@ Standard library only. Reads:
 and writes lenses/<name>.xml in flarebench's XML (docs/formats.md), byte for byte what
 flarebench's own writer produces for the same system, plus the lens table in lenses/README.md.
 
-Conventions (DESIGN.md section 2): millimetres; surfaces front to sensor; radius 0 is flat;
+Conventions (docs/ARCHITECTURE.md section 4): millimetres; surfaces front to sensor; radius 0 is flat;
 refractive index and Abbe number describe the medium after a surface; `height` is the clear
 semi-diameter. Paraxial values below are at the d line (587.56 nm), object at infinity.
 """

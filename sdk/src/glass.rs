@@ -27,7 +27,7 @@ pub enum Dispersion {
 
 impl Dispersion {
     /// The exact two-term Cauchy fit through the d line (nd) whose F − C dispersion gives Vd:
-    /// `B = (nd − 1) / (Vd (1/λF² − 1/λC²))`, `A = nd − B/λd²` (DESIGN §3).
+    /// `B = (nd − 1) / (Vd (1/λF² − 1/λC²))`, `A = nd − B/λd²` (docs/physics.md §1).
     /// A non-finite or non-positive Vd gives a non-dispersive medium.
     pub fn cauchy_from_abbe(nd: f64, vd: f64) -> Self {
         if !(vd.is_finite() && vd > 0.0) {

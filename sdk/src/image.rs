@@ -108,8 +108,8 @@ impl HdrImage {
     }
 
     /// Makes every pixel black, in chunks spread over the cores: how a frame buffer kept from
-    /// frame to frame is cleared (1920 × 1080: 2.0 ms on one core of the machine in
-    /// docs/performance.md, 1.6 ms on two — the memory's bandwidth, not the cores, bounds it).
+    /// frame to frame is cleared (1920 × 1080 on the 2-core machine of docs/performance.md:
+    /// 2.0 ms on one core, 1.6 ms on two — the memory's bandwidth, not the cores, bounds it).
     pub fn fill_black(&mut self) {
         fill_black(&mut self.pixels);
     }

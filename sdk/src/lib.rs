@@ -3,7 +3,8 @@
 //! - [`system`]: the lens prescription model ([`LensSystem`], [`Surface`]) and its validation.
 //! - [`glass`]: dispersion — the exact two-term Cauchy fit from nd/Vd and the refractiveindex.info
 //!   catalogue formulas for 1613 named glasses.
-//! - [`io`]: reading and writing lens files (OpenLensFlare XML and our superset of it).
+//! - [`io`]: reading and writing lens files (OpenLensFlare XML and our superset of it, Zemax
+//!   `.zmx`, PBRT `.dat`) and OpenLensFlare's ghost bounds.
 //! - [`trace`]: the sequential ray tracer (scalar f64, batched structure-of-arrays f32/f64).
 //! - [`fresnel`] and [`coating`]: interface reflectance, bare and with thin-film coatings.
 //! - [`paraxial`]: first-order analysis (focal lengths, pupils, f-number, Petzval sum).
@@ -12,10 +13,17 @@
 //! - [`color`]: spectral → colour (CIE 1931 observer, linear sRGB, light spectra, the
 //!   wavelengths a render samples and their RGB weights).
 //! - [`image`] and [`raster`]: linear HDR images and the exact-coverage CPU triangle rasterizer.
+//! - [`spectrum`]: the d, F and C line wavelengths.
+//! - [`ghost`]: ghost paths, their traced grids and bounds, bounds tables, the four-reflection
+//!   energy bound, and meshing a ghost for the rasterizer.
+//! - [`starburst`]: the Fraunhofer diffraction starburst of the aperture.
+//! - [`abi`]: the plugin interface (the versioned C ABI, the author's trait and export macro,
+//!   the host's loader).
 //!
-//! Conventions (docs/ARCHITECTURE.md): millimetres, nanometres for wavelengths, radians inside;
-//! surfaces are listed object side first; curvature `c = 1/R` with `R > 0` meaning the centre of
-//! curvature lies toward the sensor; the optical axis is +z toward the sensor.
+//! Conventions (docs/ARCHITECTURE.md §4; the formulas are in docs/physics.md): millimetres,
+//! nanometres for wavelengths, radians inside; surfaces are listed object side first;
+//! curvature `c = 1/R` with `R > 0` meaning the centre of curvature lies toward the sensor; the
+//! optical axis is +z toward the sensor.
 
 pub mod abi;
 pub mod aperture;

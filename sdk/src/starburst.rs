@@ -1,5 +1,5 @@
 //! The diffraction starburst: the Fraunhofer pattern of the aperture stop, as a bright light's
-//! image on the sensor (DESIGN §3, Hullin et al. 2011 §3.1). Physics and scaling are written
+//! image on the sensor (Hullin et al. 2011 §3.1). Physics and scaling are written
 //! out in `docs/starburst.md`; in short:
 //!
 //! 1. [`PowerSpectrum`]: the aperture (circle, iris or mask, times an optional dust/scratch
@@ -47,8 +47,9 @@ pub struct StarburstSettings {
     /// Texels across the aperture's diameter (the unit square [-1, 1]² of stop coordinates).
     /// It sets the pattern's reach: `±pupil_texels·λs·N/2` on the sensor.
     pub pupil_texels: usize,
-    /// Zero padding factor (≥ 2; DESIGN §3 asks ≥ 4): the transform is
-    /// `pupil_texels × padding` per side and a bin is `λs·N/padding` on the sensor.
+    /// Zero padding factor (≥ 2; 4 by default resolves the rings, docs/starburst.md): the
+    /// transform is `pupil_texels × padding` per side and a bin is `λs·N/padding` on the
+    /// sensor.
     pub padding: usize,
     /// Wavelengths summed (stratified over 380–780 nm, CIE 1931 weighted).
     pub wavelengths: usize,

@@ -22,7 +22,7 @@ fn lens(stem: &str) -> LensSystem {
 /// exact ray by ray on its own grid (the search grid `precise` starts from), and the dilated
 /// upper cell sum covers what lies between that grid's vertices; what is left is sampling —
 /// a footprint no vertex of the search grid sees, which `precise` misses as well. Measured
-/// 2026-11-24 (the figures in docs/ARCHITECTURE.md): the largest traced/bound over every lit
+/// (the figures in docs/ARCHITECTURE.md): the largest traced/bound over every lit
 /// path of the three small lenses at 0–30° is 0.78 (double Gauss, 0°), on the Nikon zoom
 /// 0.60 (sampled paths, 0–20°). Without the dilation (upper cell sum alone) the Heliar's
 /// 2-0-7-6 at 30° reached 1.66: its 4 × 2 mm footprint covers 6 vertices of the 33² grid.
@@ -131,12 +131,12 @@ fn the_traced_bound_holds_on_every_lit_four_reflection_path_of_the_small_lenses(
     let c = check("heliar-tronnier", &[30.0], 1);
     assert!(c.lit > 50, "{c:?}");
     // It culls most of the Heliar's paths at the default threshold (measured 93.6–95.0% at
-    // 0–30°; the old bound culled 1%).
+    // 0–30°; an untraced bound culls 1%).
     assert!(c.culled[0] > 0.85, "{c:?}");
 }
 
 /// The Nikon zoom (36 785 paths): the bound holds on a sample of the paths at 10° and culls
-/// nearly all of them at the default threshold (measured 98.3%; the old bound culled 27%).
+/// nearly all of them at the default threshold (measured 98.3%; an untraced bound culls 27%).
 #[test]
 fn the_traced_bound_holds_on_the_nikon_zoom_and_culls_most_of_its_paths() {
     let c = check("nikon-zoom-short", &[10.0], 37);

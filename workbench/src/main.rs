@@ -14,8 +14,8 @@ const MI_OPTION_PURGE_DELAY: libmimalloc_sys::mi_option_t = 15;
 /// `MIMALLOC_PURGE_DELAY` is set. By default mimalloc purges memory that has been free for a
 /// second, so every so many frames the next frame's meshes and coarse images fault their
 /// pages in again and the kernel clears them: the Nikon zoom's frame at 1920 × 1080 made 4 500
-/// page faults, and its render was about 10% faster without them (docs/performance.md). The
-/// process keeps its largest frame's memory instead.
+/// page faults, and its render was about 10% faster without them. The process keeps its
+/// largest frame's memory instead.
 fn keep_freed_memory() {
     if std::env::var_os("MIMALLOC_PURGE_DELAY").is_none() {
         // SAFETY: sets one integer option of mimalloc's (-1: never purge); called first thing

@@ -88,9 +88,7 @@ fn reference_error_is_reported_and_small() {
     let e = &v["error"];
     let rmse = e["relative_rmse"].as_f64().unwrap();
     let energy = e["energy_error"].as_f64().unwrap();
-    // Measured 2026-11-24 (one-pixel edges): default RMSE 1.49%, energy −0.08%; high 1.33%
-    // and −0.03%; fast 3.5% and −1.9%. With per-ghost spectral sampling and the dim budget
-    // (third session): default 0.89%, energy −0.13%. The budget is 2%.
+    // Measured for the default preset: RMSE 0.89%, energy −0.13%. The budget is 2%.
     assert!(rmse > 0.0 && rmse < 0.02, "relative RMSE {rmse}");
     assert!(energy.abs() < 0.005, "energy error {energy}");
     assert!(v["timings"]["reference_ms"].as_f64().is_some());
@@ -622,7 +620,7 @@ fn openlensflare_bounds_render_the_heliar_as_our_own_bounds_do() {
 }
 
 /// The image with OpenLensFlare's bounds against ours (none, or our JSON table), at 320×180,
-/// default quality, lights 5,0 and 10,30. Measured on 2026-11-25: relative RMSE 4.4% and
+/// default quality, lights 5,0 and 10,30. Measured: relative RMSE 4.4% and
 /// 5.6% against the render without a table (6.5% against our table at 10,30; our own table
 /// against no table: 0.4% and 3.6%), energy −1.8% and −1.2%. The difference is the file's
 /// rectangles cutting ghosts (372 of its 574 entries with light: OpenLensFlare clips at a

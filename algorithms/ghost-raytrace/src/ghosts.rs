@@ -207,17 +207,17 @@ pub fn render_into_reusing(
 
 /// Most bands of a ghost drawn as one fringed mesh. A ghost is traced at about two bands per
 /// drawn pixel of dispersion, so a group spans up to about 4 drawn pixels: what shifts inside
-/// the ghost (its caustic lines, its shading) stays where a group's bands meet. Measured
-/// (docs/performance.md): with all bands in one group the Heliar's error at 1920 × 1080 rose
-/// from 1.72% to 1.89%; with 8, 1.75% (3: 1.75%, 12: 1.88%).
+/// the ghost (its caustic lines, its shading) stays where a group's bands meet. Measured on
+/// the Heliar at 1920 × 1080 (1.72% band by band): all bands in one group 1.89%, groups of 12
+/// 1.88%, of 8 or of 3 1.75%; 8 is the largest that keeps the error.
 pub const FRINGE_GROUP: usize = 8;
 
 /// Drawn pixels (of the ghost's sensor rectangle) per grid triangle below which a ghost is
 /// drawn band by band: there the fringed meshing (each band's triangle extended to the mean
-/// one, the lines fitted, in f64) costs more than the pixels it saves. Measured
-/// (docs/performance.md): with every dispersive ghost fringed, the Nikon zoom's fast frame
-/// took 72–114 ms against 65–70 ms band by band; from 16 to 64 pixels a triangle, 58–68 ms,
-/// with the default frames' gains kept (at 256 they were lost).
+/// one, the lines fitted, in f64) costs more than the pixels it saves. Measured on the Nikon
+/// zoom's fast frame: with every dispersive ghost fringed it takes 72–114 ms against 65–70 ms
+/// band by band; with a threshold from 16 to 64 pixels a triangle, 58–68 ms, and the default
+/// frames keep their gain from the fringe (at 256 they lose it).
 pub const FRINGE_MIN_PIXELS: f64 = 32.0;
 
 /// Triangles (about) made before they are rasterized: bounds the memory a batch's meshes
@@ -262,7 +262,7 @@ impl Targets<'_> {
 /// batches of about [`BATCH_TRIANGLES`]; each group's meshes of a batch are joined and
 /// rasterized, its tiles in parallel, its triangles in plan order, so the image does not
 /// depend on the number of threads. (Drawing a batch's coarse groups side by side, each
-/// rasterized in parallel, was measured slower: the Heliar's default frame 21 → 25 ms.)
+/// rasterized in parallel, is slower: the Heliar's default frame 25 against 21 ms.)
 fn render_groups(
     ctxs: &[GhostContext<'_>],
     plans: &[LightPlan],
@@ -305,7 +305,7 @@ fn render_groups(
         .collect();
     // Each group's triangles: a batch takes in a next group only whole (the small groups of a
     // frame meshed together, their work spread over the cores at once; a large group split
-    // into batches of its own, measured faster on the Nikon zoom than batches across groups).
+    // into batches of its own: on the Nikon zoom, batches across groups are 5–7% slower).
     let mut group_triangles = vec![0; groups.len()];
     for u in &units {
         group_triangles[u.0] += u.3;

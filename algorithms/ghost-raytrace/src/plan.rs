@@ -640,7 +640,7 @@ pub fn dim_threshold(shares: impl Iterator<Item = f64>, budget: f64) -> f64 {
 /// whose cells land on the sensor with areas spreading by at most `(19/16)² ≈ 1.41` between
 /// the median and the 90th percentile (`flarebench_sdk::ghost::bounds::grid_for_spread`):
 /// such a ghost is drawn well by fewer triangles ([`PlanOptions::smooth_grid_scale`]).
-/// Measured on the Nikon zoom (960 × 540, light 10°, 30°, with a table, 2026-12-01): three
+/// Measured on the Nikon zoom (960 × 540, light 10°, 30°, with a table): three
 /// quarters of the grid for ghosts up to 18 raised its error from 1.752% to 1.783%, up to 19
 /// to 1.809%, up to 21 to 1.876%, and up to 25 to 2.30% — and for every ghost (all grids ×
 /// 0.85) to 2.01%.

@@ -6,13 +6,13 @@
 //! least 240 vertices a side).
 //!
 //! The spectrum, measured on the Nikon zoom's most dispersive ghost (7-0, light 10°, 30°,
-//! 960 × 540, reference grid) against 160 bands (the example `bands_by_ghost`): 31 bands (the
-//! reference's before version 3, about one pixel apart) 0.96% of the ghost's own light, 40
-//! bands 0.65%, 80 bands 0.20%, an eighth of a pixel apart (121 bands) 0.11%. The Heliar's
-//! most dispersive ghosts at 1920 × 1080 were within 0.16% at 31 bands against 80.
+//! 960 × 540, reference grid) against 160 bands (the example `bands_by_ghost`): 31 bands
+//! (about one pixel apart) 0.96% of the ghost's own light, 40 bands 0.65%, 80 bands 0.20%, an
+//! eighth of a pixel apart (121 bands) 0.11%. The Heliar's most dispersive ghosts at
+//! 1920 × 1080 are within 0.16% at 31 bands against 80.
 //!
-//! The grids, measured on the Heliar (5°, 160×90) while ghost edges were still feathered over
-//! a grid cell: the relative RMSE between successive densities ×√2 apart falls as 2.7e-3,
+//! The grids, measured on the Heliar (5°, 160×90) with ghost edges feathered over a grid
+//! cell: the relative RMSE between successive densities ×√2 apart falls as 2.7e-3,
 //! 1.6e-3, 1.1e-3, 6.0e-4 from 4× a side, under 1e-3 at 10×. `tests/reference.rs` checks that
 //! twice its rays, and twice its bands, change the image by under 0.1%.
 

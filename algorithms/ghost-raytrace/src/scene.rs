@@ -162,20 +162,11 @@ impl Quality {
 
     /// Multiplier, with [`Quality::grid_scale`], on a smooth ghost's grid
     /// (`plan::SMOOTH_GRID`): its triangles cost time by their number more than by their
-    /// pixels. Measured 2026-12-01 (light 10°, 30°, with a table, against the reference;
-    /// docs/performance.md), default preset:
-    ///
-    /// | smooth grid × | Heliar 1920 × 1080 | Nikon zoom 960 × 540 |
-    /// |---|---|---|
-    /// | 1 | 1.882%, 17.5 ms | 1.752% |
-    /// | 0.75 | 1.926%, 13.6–14.5 ms | 1.809% |
-    /// | 0.7 | 1.947% | 1.845% |
-    /// | 0.65 | 1.997% | 1.894% |
-    ///
-    /// At 0.75 the other measured frames, table / traced: Heliar 1920 × 1080 at 20°, 120°
-    /// 1.648% / 1.600%, 960 × 540 at 5°, 0° 1.762% / 1.802% and at 15°, 60° 1.253% / 1.253%;
-    /// the Nikon zoom traced 1.628%. Its 1920 × 1080 default frame went from 563 to 510 ms. The fast
-    /// preset's grids are at or near their floor already; the high one keeps every grid.
+    /// pixels. For the default preset (light 10°, 30°, with a table, against the reference),
+    /// 0.75 takes the Heliar's 1920 × 1080 frame from 17.5 to about 14 ms for an error of
+    /// 1.926% against 1.882% at 1, and the Nikon zoom's (960 × 540) to 1.809% against 1.752%;
+    /// 0.65 reaches 1.997% and 1.894%, too close to the 2% budget. The fast preset's grids are
+    /// at or near their floor already; the high one keeps every grid.
     pub fn smooth_grid_scale(self) -> f64 {
         match self {
             Quality::Fast => 1.0,
@@ -186,23 +177,11 @@ impl Quality {
 
     /// Coarse pixels a ghost's radius must span when it is drawn into a coarse frame
     /// (`plan::coarse_factor`): the edge blur this allows touches about 1/this of the ghost's
-    /// area. The default keeps every measured frame within 2% relative RMSE against the
-    /// reference, with traced bounds and with a precomputed table; 80 did too on the Heliar,
-    /// but with no margin (1.990%) and not measured on the Nikon zoom.
-    /// Measured 2026-12-01 (against the spectrally converged reference, default preset
-    /// otherwise, [`Quality::max_downscale`] 8), table / traced:
-    ///
-    /// | frame | 104 | 96 | 80 | 64 |
-    /// |---|---|---|---|---|
-    /// | Heliar 1920 × 1080, 10°, 30° | 1.836% / 1.619% (20.6 ms) | 1.882% / 1.733% (17.8 ms) | 1.990% / 1.854% (17.6 ms) | 2.79% / 2.78% (14.4 ms) |
-    /// | Heliar 1920 × 1080, 20°, 120° | 1.560% / 1.491% | 1.642% / 1.588% | 1.642% / 1.588% | |
-    /// | Heliar 960 × 540, 5°, 0° | 1.502% / 1.523% | 1.543% / 1.568% | 1.845% / 1.866% | |
-    /// | Heliar 960 × 540, 15°, 60° | 1.139% / 1.169% | 1.246% / 1.247% | 1.322% / 1.247% | |
-    /// | Nikon zoom 960 × 540, 10°, 30° | 1.761% / 1.570% | 1.752% / 1.558% | | |
-    ///
-    /// (Times: the Heliar's default frame with a table.) Earlier, against the first reference
-    /// and with a largest factor of 16: 64 gave 2.89%, 80 2.06%, 128 1.84%, 160 1.37% on the
-    /// Heliar traced.
+    /// area. The default, 96, keeps every measured frame within 2% relative RMSE against the
+    /// reference, with traced bounds and with a precomputed table (the Heliar at 1920 × 1080,
+    /// 10°, 30°: 1.882% / 1.733%, table / traced, with the smooth grids at 1; the Nikon zoom at
+    /// 960 × 540: 1.752% / 1.558%). 80 leaves the Heliar no margin (1.990%) for no time, and
+    /// 64 exceeds the budget (2.79%).
     pub fn coarse_pixels_per_radius(self) -> f64 {
         match self {
             Quality::Fast => 32.0,
@@ -211,14 +190,13 @@ impl Quality {
         }
     }
 
-    /// Largest coarse-frame factor a ghost may be drawn at (`plan::coarse_factor`). Measured
-    /// (2026-12-01, docs/performance.md; Heliar at 1920 × 1080, light 10°, 30°, against the
-    /// reference): at 8 rather than 16 the Heliar's default frame is as fast (its one ghost at
-    /// 1/16, 4-0, costs little more at 1/8) and its error falls from 1.961% to 1.836% with a
-    /// precomputed table (1.750% to 1.619% traced); the Nikon zoom's at 960 × 540 does not
-    /// change. The fast preset keeps 16: at 8 its frames took 7% (Heliar) and 12% (Nikon) longer.
-    /// At 4 (2026-12-02) the default's errors fall (Heliar 1.852% → 1.637% with a table at 10°,
-    /// 30°; the Nikon's unchanged) but the Heliar's frame takes 15.9 against 12.3 ms.
+    /// Largest coarse-frame factor a ghost may be drawn at (`plan::coarse_factor`). For the
+    /// default preset (Heliar at 1920 × 1080, light 10°, 30°, against the reference), 8 costs
+    /// no more time than 16 (the one ghost at 1/16, 4-0, costs little more at 1/8) and lowers
+    /// the error from 1.961% to 1.836% with a precomputed table (1.750% to 1.619% traced); the
+    /// Nikon zoom's does not change. 4 lowers the Heliar's error further (1.852% to 1.637%) but
+    /// its frame takes 15.9 instead of 12.3 ms. The fast preset keeps 16: at 8 its frames take
+    /// 7% (Heliar) and 12% (Nikon zoom) longer.
     pub fn max_downscale(self) -> usize {
         match self {
             Quality::Fast => crate::plan::MAX_DOWNSCALE,
@@ -232,10 +210,10 @@ impl Quality {
     /// ([`crate::plan::dim_threshold`]). Measured on the Nikon zoom (480×270, light 10°, 30°,
     /// 31 bands): a fixed cut at 1e-6 of the direct image's energy dropped 83 of 210 ghosts
     /// and 3.2% of the ghost energy, which alone made 2.2% of the default's error. The
-    /// default's 1e-3 (2026-11-25, 10°, 30°; was 3e-3): Nikon zoom at 960 × 540 2.014% →
-    /// 1.872% (157 ghosts drawn instead of 146, no measurable time), Heliar at 1920 × 1080
-    /// 1.855% → 1.718% (its small, bright ghost 7-3 kept); 3e-4 gains little more (1.858%,
-    /// 1.718%).
+    /// default's 1e-3, against 3e-3 (light 10°, 30°): Nikon zoom at 960 × 540 1.872% against
+    /// 2.014% (157 ghosts drawn instead of 146, no measurable time), Heliar at 1920 × 1080
+    /// 1.718% against 1.855% (its small, bright ghost 7-3 kept); 3e-4 gains little more
+    /// (1.858%, 1.718%).
     pub fn dim_budget(self) -> f64 {
         match self {
             Quality::Fast => 3e-2,

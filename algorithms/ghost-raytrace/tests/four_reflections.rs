@@ -174,7 +174,7 @@ fn a_table_without_four_reflection_ghosts_gives_the_same_plan_as_no_table() {
 }
 
 /// The Nikon zoom has 36 785 four-reflection paths: at fast quality the traced bound leaves
-/// out nearly all of them (measured: 36 520 at 10°; the old untraced bound 25 662), the one
+/// out nearly all of them (measured: 36 520 at 10°; an untraced bound 25 662), the one
 /// four-reflection ghost the default quality draws (6-5-7-6) is still traced, and the image
 /// stays finite.
 #[test]

@@ -1,10 +1,9 @@
 //! The reference renderer converges: twice its rays, or twice its bands, change the image by
 //! under 0.1%.
 //!
-//! The Heliar (28 ghosts, all 31 bands, light at 5°, 160×90). Measured 8.3e-4 while edges were
-//! still feathered over a grid cell (the one-pixel edges came later; the assertion is the
-//! same). Not every lens converges as fast: the Cooke triplet's caustic ghosts gave 7.1e-3 at
-//! the same density.
+//! The Heliar (28 ghosts, all 31 bands, light at 5°, 160×90): measured 8.3e-4 with edges
+//! feathered over a grid cell. Not every lens converges as fast: the Cooke triplet's caustic
+//! ghosts gave 7.1e-3 at the same density.
 
 use flarebench_sdk::LensSystem;
 use flarebench_sdk::aperture::Aperture;
@@ -51,8 +50,8 @@ fn doubling_the_reference_rays_changes_the_image_by_under_a_thousandth() {
 /// The spectrum: the Nikon zoom's most dispersive ghost whose bands its dispersion sets (13-7
 /// at 480 × 270, 127 bands) takes more bands than the fewest the reference allows, and twice
 /// as many, half as far apart, change its image by under 0.1% of its light (measured 2.6e-4).
-/// With the 31 bands the reference had before version 3, its ghost 7-0 at 960 × 540 was 0.96%
-/// of its light from 160 bands (the example `bands_by_ghost`).
+/// At a fixed 31 bands, its ghost 7-0 at 960 × 540 is 0.96% of its light from 160 bands (the
+/// example `bands_by_ghost`): why the reference's bands follow each ghost's dispersion.
 #[test]
 fn doubling_the_reference_bands_changes_a_dispersive_ghost_by_under_a_thousandth() {
     let (sys, frame) = lens_and_frame("nikon-zoom-short", 480, 270);

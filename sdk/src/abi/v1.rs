@@ -1,6 +1,6 @@
 //! ABI version 1: every type and constant that crosses the plugin library boundary.
 //!
-//! Rules (DESIGN §5): only `#[repr(C)]` plain data and `extern "C"` function pointers; enums
+//! Rules (docs/plugins.md §4): only `#[repr(C)]` plain data and `extern "C"` function pointers; enums
 //! travel as `u32` and are checked by the receiver, booleans as `u8`; strings are UTF-8 byte
 //! ranges ([`AbiStr`]), never NUL-terminated and never owned across the boundary. A minor
 //! version only appends fields at the end of a struct that carries its own `struct_size`

@@ -908,10 +908,10 @@ pub fn feather_width(bounds: &GhostBounds, n: usize, frame: &Frame) -> f32 {
 
 /// Triangles of at least this many pixels² (of the frame drawn into) are point-sampled
 /// ([`Coverage::Sampled`]); smaller ones — folds, caustics, diffraction-sized triangles —
-/// keep exact coverage. Measured 2026-11-24 (light 10°, 30°, default quality; figures in
-/// docs/performance.md): the Heliar's error at 1920 × 1080 is 1.863% exact and 1.861% for
-/// 2, 4 and 16 px²; the Nikon zoom's at 960 × 540 is 2.00% exact, 2.08% at 4 px² and 2.01%
-/// at 16 px², where sampling small folded triangles starts to cost accuracy.
+/// keep exact coverage. Measured at light 10°, 30°, default quality: the Heliar's error at
+/// 1920 × 1080 is 1.863% exact and 1.861% for 2, 4 and 16 px²; the Nikon zoom's at 960 × 540
+/// is 2.00% exact, 2.08% at 4 px² and 2.01% at 16 px² — below 16, sampling small folded
+/// triangles starts to cost accuracy.
 pub const SAMPLED_MIN_AREA: f32 = 16.0;
 
 /// Width of a ghost's edge on the image, in pixels of the frame it is drawn into.

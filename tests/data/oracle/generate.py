@@ -13,7 +13,7 @@ Usage (from the repository root, in a throwaway virtual environment):
 
     python3 -m venv /tmp/oracle-venv
     /tmp/oracle-venv/bin/pip install optiland mpmath rayoptics
-    /tmp/oracle-venv/bin/python tests/data/oracle/generate.py --shared /work/shared
+    /tmp/oracle-venv/bin/python tests/data/oracle/generate.py
 
 See README.md beside this script for the conventions and the mapping between the codes.
 """
@@ -429,10 +429,10 @@ def generate(name: str, lens_file: str, src: Path, src_label: str, fields: list[
 
 LENSES = [
     # name, file in the repo, source, fields (degrees), image plane
-    ("heliar-tronnier", "openlensflare-systems/heliar-tronnier.xml", [0.0, 6.0, 12.0], "file_sensor"),
-    ("nikon-zoom-short", "openlensflare-systems/nikon-zoom-short.xml", [0.0, 7.0, 14.0], "file_sensor"),
-    ("canon-zoom-short", "openlensflare-systems/canon-zoom-short.xml", [0.0, 8.0, 16.0], "file_sensor"),
-    ("double-gauss-50mm", "lenses-csv/pbrt_dgauss.50mm.csv", [0.0, 10.0, 20.0], "paraxial_focus"),
+    ("heliar-tronnier", "openlensflare/heliar-tronnier.xml", [0.0, 6.0, 12.0], "file_sensor"),
+    ("nikon-zoom-short", "openlensflare/nikon-zoom-short.xml", [0.0, 7.0, 14.0], "file_sensor"),
+    ("canon-zoom-short", "openlensflare/canon-zoom-short.xml", [0.0, 8.0, 16.0], "file_sensor"),
+    ("double-gauss-50mm", "csv/pbrt_dgauss.50mm.csv", [0.0, 10.0, 20.0], "paraxial_focus"),
 ]
 
 
@@ -453,12 +453,13 @@ def dump(doc: dict) -> str:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--shared", default="/work/shared", help="the shared/ folder (has data/)")
+    ap.add_argument("--sources", default=str(HERE.parents[2] / "lenses" / "sources"),
+                    help="the original lens files (default: the repository's lenses/sources/)")
     ap.add_argument("--out", default=str(HERE))
     args = ap.parse_args()
     for name, rel, fields, image_plane in LENSES:
-        src = Path(args.shared) / "data" / rel
-        doc = generate(name, f"lenses/{name}.xml", src, f"shared/data/{rel}", fields, image_plane)
+        src = Path(args.sources) / rel
+        doc = generate(name, f"lenses/{name}.xml", src, f"lenses/sources/{rel}", fields, image_plane)
         out = Path(args.out) / f"{name}.json"
         out.write_text(dump(doc))
         pr = doc["precision"]

@@ -38,7 +38,7 @@ pub struct PrecomputeArgs {
     /// Angle step (degrees), at most 0.5. The default 0.25: between two angles a light's
     /// bounds join both neighbours' rectangles, which a finer table keeps tighter (measured
     /// on the Heliar at 1920 × 1080, light 10°, 30°: 1.926% relative RMSE at 0.5°, 1.852% at
-    /// 0.25°, 1.803% at 0.1°, the same frame time; docs/performance.md).
+    /// 0.25°, 1.803% at 0.1°, the same frame time).
     #[arg(long, default_value_t = 0.25)]
     pub step_deg: f64,
     /// Ghost paths: 2 (two reflections) or 4 (two and four reflections). With 4 the table

@@ -44,7 +44,8 @@ pub struct RenderArgs {
     /// spans the film's width; its height follows the aspect ratio.
     #[arg(long, value_parser = parse_size)]
     pub size: Option<(usize, usize)>,
-    /// Speed against accuracy: fast, default or high (docs/performance.md gives each one's error).
+    /// Speed against accuracy: fast, default or high (docs/performance.md gives the fast and
+    /// default presets' frame times and errors).
     #[arg(long, default_value_t = Quality::Default)]
     pub quality: Quality,
     /// Ghost paths: 2 (two reflections) or 4 (two and four reflections; four-reflection paths
