@@ -2,6 +2,10 @@
 //! `FLAREBENCH_PLUGIN_PATH` (separated like `PATH`), and by explicit path. Every library found
 //! is loaded and checked (`flarebench_sdk::abi::host::load`); one that fails is kept with its
 //! reason, so `plugins list` can show it as broken.
+//!
+//! Test plugins — libraries named `flarebench_test_*` (`libflarebench_test_….so`), which
+//! `cargo build --workspace` puts beside the binary for the host's tests — are not discovered
+//! unless [`TEST_PLUGINS_VAR`] is `1`; a path given explicitly always loads.
 
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
@@ -11,6 +15,11 @@ use flarebench_sdk::abi::host::{self, LoadedPlugin, PluginLoadError};
 
 /// The environment variable with extra plugin directories.
 pub const PLUGIN_PATH_VAR: &str = "FLAREBENCH_PLUGIN_PATH";
+/// Set to `1` to discover test plugins ([`TEST_PLUGIN_PREFIX`]) in the search directories.
+pub const TEST_PLUGINS_VAR: &str = "FLAREBENCH_TEST_PLUGINS";
+/// The library name (after the platform's `lib` prefix) that marks a plugin built for the
+/// host's tests.
+pub const TEST_PLUGIN_PREFIX: &str = "flarebench_test_";
 
 /// A library found, loaded or not.
 #[derive(Debug)]
@@ -36,18 +45,26 @@ pub fn search_dirs() -> Vec<PathBuf> {
     dirs
 }
 
-/// Whether `path` is named like a shared library on this platform.
-fn is_library(path: &Path) -> bool {
-    path.is_file()
-        && path.file_name().and_then(|n| n.to_str()).is_some_and(|n| {
-            n.starts_with(std::env::consts::DLL_PREFIX) && n.ends_with(std::env::consts::DLL_SUFFIX)
-        })
+/// The library name of `path` without the platform's prefix and suffix, when it is named like
+/// a shared library on this platform and is a file.
+fn library_name(path: &Path) -> Option<&str> {
+    let name = path.file_name()?.to_str()?;
+    let stem = name
+        .strip_prefix(std::env::consts::DLL_PREFIX)?
+        .strip_suffix(std::env::consts::DLL_SUFFIX)?;
+    path.is_file().then_some(stem)
+}
+
+/// Whether test plugins are discovered ([`TEST_PLUGINS_VAR`] is `1`).
+fn test_plugins_wanted() -> bool {
+    std::env::var_os(TEST_PLUGINS_VAR).is_some_and(|v| v == "1")
 }
 
 /// Every library in the search directories plus `explicit` paths, each loaded (explicit paths
 /// first, so they win over a discovered plugin of the same name).
 pub fn discover(explicit: &[PathBuf]) -> Vec<Found> {
     let mut paths: Vec<PathBuf> = explicit.to_vec();
+    let tests = test_plugins_wanted();
     for dir in search_dirs() {
         let Ok(entries) = std::fs::read_dir(&dir) else {
             continue;
@@ -55,7 +72,9 @@ pub fn discover(explicit: &[PathBuf]) -> Vec<Found> {
         let mut libs: Vec<PathBuf> = entries
             .flatten()
             .map(|e| e.path())
-            .filter(|p| is_library(p))
+            .filter(|p| {
+                library_name(p).is_some_and(|n| tests || !n.starts_with(TEST_PLUGIN_PREFIX))
+            })
             .collect();
         libs.sort();
         paths.extend(libs);

@@ -25,6 +25,54 @@ fn beside_binary(lib: &str) -> PathBuf {
     p
 }
 
+/// Runs `flarebench` with `args`, test plugins discovered.
+fn with_test_plugins(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_flarebench"))
+        .args(args)
+        .env("FLAREBENCH_TEST_PLUGINS", "1")
+        .output()
+        .unwrap()
+}
+
+/// The names `plugins list --json` shows.
+fn listed(v: &serde_json::Value) -> Vec<String> {
+    v["plugins"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["name"].as_str().unwrap_or_default().to_string())
+        .collect()
+}
+
+#[test]
+fn test_plugins_beside_the_binary_are_listed_only_when_asked_for() {
+    beside_binary("flarebench_test_plugin_faulty");
+    beside_binary("example_glow");
+    let names = listed(&json(&["plugins", "list", "--json"]));
+    assert!(names.iter().any(|n| n == "example-glow"), "{names:?}");
+    assert!(!names.iter().any(|n| n.starts_with("test-")), "{names:?}");
+    let out = with_test_plugins(&["plugins", "list", "--json"]);
+    assert!(out.status.success());
+    let names = listed(&serde_json::from_slice(&out.stdout).unwrap());
+    assert!(names.iter().any(|n| n == "test-faulty"), "{names:?}");
+    // Without the variable a test plugin is still loaded by its path.
+    let path = beside_binary("flarebench_test_plugin_faulty");
+    let out = flarebench(&[
+        "plugins",
+        "list",
+        "--json",
+        "--plugin",
+        path.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let names = listed(&serde_json::from_slice(&out.stdout).unwrap());
+    assert!(names.iter().any(|n| n == "test-faulty"), "{names:?}");
+}
+
 #[test]
 fn plugins_list_shows_the_plugins_beside_the_binary_with_their_parameters() {
     beside_binary("ghost_raytrace");
@@ -73,7 +121,7 @@ fn compare_runs_each_algorithm_and_reports_a_failing_one_without_stopping() {
     let tmp = temp_dir("compare");
     let dir = tmp.path();
     let out_png = dir.join("cmp.png");
-    let out = flarebench(&[
+    let out = with_test_plugins(&[
         "compare",
         "heliar-tronnier",
         "--light",
