@@ -7,7 +7,7 @@ Standard library only. Reads:
   sources/openlensflare/*.xml   OpenLensFlare example systems (BSD-2-Clause)
   sources/csv/*.csv             prescriptions as CSV with provenance headers; systems.csv holds
                                 the global attributes and patents of the OpenLensFlare systems
-  ../glass/glass_catalog.csv    catalogue nd/Vd for named glasses
+  ../../sdk/data/glass_catalog.csv  catalogue nd/Vd for named glasses
 and writes lenses/<name>.xml in flarebench's XML (docs/formats.md), byte for byte what
 flarebench's own writer produces for the same system, plus the lens table in lenses/README.md.
 
@@ -78,7 +78,7 @@ class Lens:
 def load_catalog() -> dict[str, tuple[float, float]]:
     """`CATALOG:NAME` (upper case) -> listed (nd, vd)."""
     table = {}
-    with open(LENSES / "glass" / "glass_catalog.csv", newline="") as f:
+    with open(LENSES.parent / "sdk" / "data" / "glass_catalog.csv", newline="") as f:
         rows = csv.reader(line for line in f if not line.startswith("#"))
         next(rows)  # header
         for row in rows:
@@ -93,7 +93,7 @@ def glass_name(name: str) -> str:
     """Canonical `SCHOTT:NAME` for a Zemax glass (GCAT SCHOTT)."""
     key = name.upper() if ":" in name else f"SCHOTT:{name.upper()}"
     if key not in CATALOG:
-        raise SystemExit(f"glass {name} is not in lenses/glass/glass_catalog.csv")
+        raise SystemExit(f"glass {name} is not in sdk/data/glass_catalog.csv")
     return key
 
 

@@ -1,5 +1,5 @@
 //! Glass dispersion: the exact two-term Cauchy fit from (nd, Vd) and the refractiveindex.info
-//! formulas used by the bundled catalogue (`lenses/glass/glass_catalog.csv`, CC0).
+//! formulas used by the bundled catalogue (`sdk/data/glass_catalog.csv`, CC0).
 
 mod catalog;
 

@@ -664,7 +664,7 @@ mod tests {
             // SAFETY: valid pointers; a null error buffer is allowed.
             let code = unsafe { create::<Recorder>(&mut instance, std::ptr::null_mut()) };
             assert_eq!(code, status::OK);
-            let xml = include_str!("../../../lenses/heliar-tronnier.xml");
+            let xml = crate::io::olf_xml::tests::SMALL;
             let lens = LensInput {
                 xml: AbiStr::new(xml),
             };

@@ -6,12 +6,13 @@
 //!   specifications, the scene and output views.
 //! - [`export`]: the thunks behind [`export_plugin!`](crate::export_plugin): pointer checks,
 //!   `catch_unwind` around every call, errors as status + message.
-//! - [`host`]: loading a plugin library (never unloaded), checking its header, calling it, and
-//!   validating what it returns.
+//! - `host` (cargo feature `host`, which plugins leave off): loading a plugin library (never
+//!   unloaded), checking its header, calling it, and validating what it returns.
 //! - [`params`]: parameter values from `key=value` text, checked against the descriptors.
 
 pub mod author;
 pub mod export;
+#[cfg(feature = "host")]
 pub mod host;
 pub mod params;
 pub mod v1;

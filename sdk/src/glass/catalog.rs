@@ -1,11 +1,11 @@
 //! The bundled glass catalogue: 1613 glasses from the refractiveindex.info database (CC0),
-//! `lenses/glass/glass_catalog.csv`, compiled into the library.
+//! `sdk/data/glass_catalog.csv`, compiled into the library.
 
 use std::sync::OnceLock;
 
 use super::Dispersion;
 
-const BUNDLED_CSV: &str = include_str!("../../../lenses/glass/glass_catalog.csv");
+const BUNDLED_CSV: &str = include_str!("../../data/glass_catalog.csv");
 
 /// One catalogue glass.
 #[derive(Clone, Debug, PartialEq)]
@@ -85,7 +85,7 @@ impl GlassCatalog {
         })
     }
 
-    /// Parses the CSV format of `lenses/glass/glass_catalog.csv`
+    /// Parses the CSV format of `sdk/data/glass_catalog.csv`
     /// (`catalog,name,formula,min_um,max_um,coefficients,nd,vd`; `#` comment lines).
     pub fn parse(text: &str) -> Result<GlassCatalog, CatalogParseError> {
         let mut entries = Vec::new();
@@ -243,7 +243,7 @@ fn dispersion_from_formula(formula: &str, c: &[f64]) -> Result<Dispersion, Strin
 mod tests {
     use super::*;
 
-    const SCHOTT_30: &str = include_str!("../../../lenses/glass/schott_sellmeier_30.csv");
+    const SCHOTT_30: &str = include_str!("../../data/schott_sellmeier_30.csv");
 
     #[test]
     fn bundled_catalogue_has_every_glass() {

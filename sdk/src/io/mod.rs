@@ -9,7 +9,7 @@ mod atomic;
 mod error;
 mod located;
 mod olf_bounds;
-mod olf_xml;
+pub(crate) mod olf_xml;
 mod pbrt;
 mod text;
 mod xml_tree;

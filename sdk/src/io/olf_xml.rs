@@ -14,7 +14,7 @@ mod spans;
 mod write;
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
 
 pub use write::{write_olf_xml, write_xml};
 

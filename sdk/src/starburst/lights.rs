@@ -3,8 +3,8 @@
 //!
 //! Per light: the flux through the lens — its intensity × the direct image's flux at its angle
 //! (`ghost::bounds::direct_flux` at [`FLUX_LAMBDA_NM`]; the ghosts' energy shares are relative
-//! to the same flux on axis, `ghost::bounds::reference_flux`) — the chief ray's landing point ([`chief_ray_landing`] at the d line,
-//! turned by the azimuth as the ghosts' meshes are), and the aperture's spectral pattern for
+//! to the same flux on axis, `ghost::bounds::reference_flux`) — the chief ray's landing point
+//! ([`chief_ray_landing`] at the d line, turned by the azimuth as the ghosts' meshes are), and the aperture's spectral pattern for
 //! the light's spectrum (from the [`StarburstCache`]) added at the working f-number's scale
 //! ([`add_starburst`]). A light whose chief ray is lost, or whose pattern cannot reach the
 //! frame (it reaches ±texels·λ·N/2 for λ up to 780 nm), draws nothing.

@@ -219,7 +219,8 @@ fn small_system() -> LensSystem {
     parse_olf_xml(SMALL, "test.xml").unwrap().system
 }
 
-const SMALL: &str = r#"<?xml version="1.0" encoding="UTF-8"?>
+/// A valid singlet with a stop and a sensor (unit tests across the crate use it).
+pub(crate) const SMALL: &str = r#"<?xml version="1.0" encoding="UTF-8"?>
 <opticalSystem>
     <name>test</name>
     <fnumber>4</fnumber>

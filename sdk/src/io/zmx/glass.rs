@@ -235,7 +235,7 @@ pub(super) fn resolve(
         "GLAS",
         format!(
             "unknown glass `{name}`{suggestions}: it is not in the bundled catalogue \
-             (lenses/glass/glass_catalog.csv); replace it by a catalogue name or a model glass \
+             (sdk/data/glass_catalog.csv); replace it by a catalogue name or a model glass \
              (___BLANK with nd and Vd)"
         ),
     ))
