@@ -34,7 +34,7 @@ pub use chief_ray::{ChiefRayError, chief_ray_landing};
 pub use lights::{
     FLUX_LAMBDA_NM, StarburstLens, StarburstLight, StarburstOutcome, StarburstSource,
 };
-pub use pattern::StarburstPattern;
+pub use pattern::{StarburstPattern, TAPER_START, edge_window};
 pub use power::PowerSpectrum;
 pub use splat::{SplatStats, add_starburst};
 

@@ -12,8 +12,8 @@ use flarebench_sdk::image::HdrImage;
 use flarebench_sdk::io::read_lens;
 use flarebench_sdk::paraxial::analyse;
 use flarebench_sdk::starburst::{
-    PowerSpectrum, StarburstCache, StarburstPattern, StarburstSettings, add_starburst,
-    chief_ray_landing,
+    PowerSpectrum, StarburstCache, StarburstPattern, StarburstSettings, TAPER_START, add_starburst,
+    chief_ray_landing, edge_window,
 };
 
 fn settings(pupil_texels: usize, padding: usize) -> StarburstSettings {
@@ -438,4 +438,52 @@ fn the_chief_ray_lands_at_the_image_height_and_turns_with_the_azimuth() {
         (x90 + y0).abs() < 1e-9 && y90.abs() < 1e-9,
         "{x90} {y90} vs {y0}"
     );
+}
+
+/// The pattern's luminance on bins `lo ≤ r < hi` from the centre: (largest, mean).
+fn band(p: &StarburstPattern, lo: f64, hi: f64) -> (f64, f64) {
+    let n = p.size();
+    let c = (n / 2) as f64;
+    let (mut max, mut sum, mut count) = (0.0f64, 0.0, 0usize);
+    for j in 0..n {
+        for i in 0..n {
+            let r = (i as f64 - c).hypot(j as f64 - c);
+            if r >= lo && r < hi {
+                let v = lum(p.at(i, j));
+                max = max.max(v);
+                sum += v;
+                count += 1;
+            }
+        }
+    }
+    (max, sum / count.max(1) as f64)
+}
+
+/// Largest step between the pattern just inside its edge and the black outside it, over the
+/// pattern's value halfway out: the cut of the transform's square must not show at any exposure.
+const EDGE_STEP_FRACTION: f64 = 1e-3;
+
+#[test]
+fn the_pattern_fades_to_black_before_the_edge_of_its_grid() {
+    for aperture in [Aperture::Circular, iris(6, 0.0), iris(5, 10.0)] {
+        let p = white(&aperture, &settings(128, 4));
+        let r = (p.size() / 2) as f64 - 1.0;
+        // Beyond the inscribed circle, the square's corners and edges included: black.
+        let (outside, _) = band(&p, r, f64::INFINITY);
+        assert_eq!(outside, 0.0, "{aperture:?}");
+        // On the last bins inside the circle the pattern is a tiny fraction of its largest
+        // value halfway out, so the step to the black outside stays under one output level at
+        // any exposure that does not saturate the pattern halfway out a thousandfold.
+        let (edge, _) = band(&p, r - 1.0, r);
+        let (half, _) = band(&p, 0.5 * r - 1.0, 0.5 * r + 1.0);
+        assert!(half > 0.0);
+        assert!(
+            edge < EDGE_STEP_FRACTION * half,
+            "{aperture:?}: {edge:e} at the edge against {half:e} halfway"
+        );
+        // The window leaves the pattern alone out to where its taper starts.
+        assert_eq!(edge_window(0.5 * r, p.size()), 1.0);
+        assert_eq!(edge_window(TAPER_START * r, p.size()), 1.0);
+        assert!(edge_window(0.9 * r, p.size()) < 0.5);
+    }
 }

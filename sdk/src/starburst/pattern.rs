@@ -8,6 +8,13 @@
 //! ([`crate::color::SpectralSampling`], luminance sum 1), so the pattern's luminance sum is 1
 //! less the part of the longer wavelengths' patterns that falls outside the grid.
 //!
+//! **Edge.** The sum is cut at the grid's edge, where the patterns of the longer wavelengths
+//! (sampled only out to `s_k` of the grid) and the far tail of the shortest are not yet zero:
+//! drawn at a high exposure, that cut shows as a square. The pattern is therefore multiplied by
+//! a radial window ([`edge_window`]): 1 out to [`TAPER_START`] of the inscribed circle's
+//! radius, a raised cosine from there to 0 at that circle, 0 beyond. The pattern ends in a
+//! circle, smoothly, with no step.
+//!
 //! **Speed.** The sum is centrally symmetric, as every power spectrum of a real aperture is
 //! (`I(−f) = I(f)`): rows above the centre are computed (rayon over rows) and the rows below
 //! are their point reflections. Per row and wavelength, the two source rows are blended once
@@ -100,6 +107,7 @@ impl StarburstPattern {
             sum_row(data, p, c, j, &scaled, &mut scratch, &mut row);
             low[j * p] = row[0];
         }
+        apply_edge_window(&mut rgb, p);
         StarburstPattern {
             size: p,
             padding: spectrum.padding(),
@@ -149,6 +157,42 @@ impl StarburstPattern {
         }
         s
     }
+}
+
+/// Where the edge window starts falling, as a fraction of the inscribed circle's radius.
+pub const TAPER_START: f64 = 0.75;
+
+/// The edge window at `r` bins from the centre of a `p × p` grid: 1 within
+/// `TAPER_START · R`, `½(1 + cos(π t))` over the taper (`t` from 0 to 1), 0 from `R = p/2 − 1`
+/// (the inscribed circle of the grid's sample positions) outward.
+pub fn edge_window(r: f64, p: usize) -> f64 {
+    let outer = (p / 2) as f64 - 1.0;
+    let inner = TAPER_START * outer;
+    if r <= inner {
+        1.0
+    } else if r >= outer {
+        0.0
+    } else {
+        0.5 * (1.0 + (std::f64::consts::PI * (r - inner) / (outer - inner)).cos())
+    }
+}
+
+/// Multiplies the pattern by [`edge_window`] (rows in parallel; rows entirely inside the
+/// taper's start are left alone).
+fn apply_edge_window(rgb: &mut [[f32; 3]], p: usize) {
+    let c = (p / 2) as f64;
+    let inner = TAPER_START * (c - 1.0);
+    rgb.par_chunks_mut(p).enumerate().for_each(|(j, row)| {
+        let dy = j as f64 - c;
+        for (i, v) in row.iter_mut().enumerate() {
+            let dx = i as f64 - c;
+            let r2 = dx * dx + dy * dy;
+            if r2 > inner * inner {
+                let w = edge_window(r2.sqrt(), p) as f32;
+                *v = v.map(|x| x * w);
+            }
+        }
+    });
 }
 
 /// One spectral line, prepared.
