@@ -442,3 +442,82 @@ fn apply_on_a_clipped_png_and_with_nothing_bright() {
         assert!(String::from_utf8_lossy(&o.stderr).starts_with("error:"));
     }
 }
+
+/// A clipped disc of radius 4 px at 255 on a background of 20 in a 960 × 540 PNG, at `centre`.
+fn clipped_photo(path: &Path, centre: [f64; 2]) -> Vec<u8> {
+    let (w, h) = (960usize, 540usize);
+    let mut raw = vec![20u8; w * h * 3];
+    for j in 0..h {
+        for i in 0..w {
+            let (dx, dy) = (i as f64 + 0.5 - centre[0], j as f64 + 0.5 - centre[1]);
+            if dx.hypot(dy) <= 4.0 {
+                raw[(j * w + i) * 3..][..3].copy_from_slice(&[255, 255, 255]);
+            }
+        }
+    }
+    image::RgbImage::from_raw(w as u32, h as u32, raw.clone())
+        .unwrap()
+        .save(path)
+        .unwrap();
+    raw
+}
+
+/// Share of the pixels more than `radius` px from `centre` whose 8-bit value differs.
+fn changed_beyond(a: &[u8], b: &[u8], w: usize, centre: [f64; 2], radius: f64) -> f64 {
+    let (mut far, mut changed) = (0usize, 0usize);
+    for (k, (pa, pb)) in a.chunks(3).zip(b.chunks(3)).enumerate() {
+        let (i, j) = ((k % w) as f64 + 0.5, (k / w) as f64 + 0.5);
+        if (i - centre[0]).hypot(j - centre[1]) > radius {
+            far += 1;
+            changed += usize::from(pa != pb);
+        }
+    }
+    changed as f64 / far as f64
+}
+
+/// The first-user case: an 8-bit photo with one clipped light gets a visible flare by
+/// default (its clipped source taken as 10 stops brighter than its pixels), the gain is
+/// reported, and a gain too small to show anything is warned about.
+#[test]
+fn apply_makes_a_visible_flare_on_a_clipped_8_bit_photo() {
+    let tmp = temp_dir("apply-photo");
+    let dir = tmp.path();
+    let centre = [600.5, 200.5];
+    let input = dir.join("photo.png");
+    let raw = clipped_photo(&input, centre);
+    let out = dir.join("flared.png");
+    let run = |extra: &[&str]| {
+        let mut a = vec![
+            "apply",
+            input.to_str().unwrap(),
+            "--lens",
+            "heliar-tronnier",
+            "-o",
+            out.to_str().unwrap(),
+            "--quality",
+            "fast",
+        ];
+        a.extend_from_slice(extra);
+        flarebench(&a)
+    };
+    let o = run(&["--json"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["lights"][0]["gain"].as_f64(), Some(1024.0));
+    let flared = image::open(&out).unwrap().to_rgb8().into_raw();
+    let share = changed_beyond(&raw, &flared, 960, centre, 12.0);
+    assert!(share > 0.01, "{:.4}% of the pixels changed", 100.0 * share);
+    assert!(v["changed_pixels"].as_u64().unwrap() > 5000, "{v}");
+    // The text report names the gain; a gain of 1 leaves the flare invisible and says so.
+    let o = run(&[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("× gain 1024"), "{err}");
+    assert!(!err.contains("warning"), "{err}");
+    let o = run(&["--gain", "1"]);
+    assert!(o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("warning: the flare changes no pixel more than 12 px"),
+        "{err}"
+    );
+}

@@ -5,17 +5,30 @@
 //! length and the film size (`sources::direction_of`, which traces the chief ray so the
 //! flare centres on the source); its colour (the region's mean, as a smooth spectrum); and
 //! its intensity such that the starburst carries the source's own energy in the image
-//! (`Σ Y` over the region × `--gain`): `I = gain · energy / direct_flux(θ)`. The ghosts follow
-//! from the same intensity, so their brightness relative to the source is the lens's. In an
-//! 8-bit image the sources are clipped, so their energy is a lower bound: raise `--gain`.
+//! (`Σ Y` over the region × the gain): `I = gain · energy / direct_flux(θ)`. The ghosts follow
+//! from the same intensity, so their brightness relative to the source is the lens's.
+//!
+//! **Gain.** An EXR's lights keep their energy (gain 1). In an 8-bit image the sources are
+//! clipped: their pixels say only that they are at least white, and the flare computed from
+//! that energy stays under one 8-bit step (a clipped disc of radius 4 on a background of 20
+//! changed 0.00% of the pixels more than 12 px from it). A clipped source is taken to be
+//! [`CLIPPED_SOURCE_STOPS`] stops brighter than its pixels — a street light or a lamp in a
+//! photograph exposed for its scene is some 6–12 stops above white, the sun 15 or more. The
+//! gain used is printed; `--gain` sets it instead. When the flare still changes no pixel of a
+//! PNG output more than [`AWAY_FROM_LIGHT_PX`] beyond the lights, a warning says so.
 
 use std::path::PathBuf;
+
+/// How many stops brighter than its pixels a clipped source of an 8-bit image is taken to be
+/// (module docs).
+pub const CLIPPED_SOURCE_STOPS: f64 = 10.0;
 
 use clap::Args;
 use flarebench_sdk::color::LightSpectrum;
 use flarebench_sdk::ghost::GridTrace;
 use flarebench_sdk::ghost::bounds::direct_flux;
 use flarebench_sdk::ghost::render::Frame;
+use flarebench_sdk::image::HdrImage;
 use flarebench_sdk::starburst::StarburstCache;
 use flarebench_sdk::trace::InterfaceTableSet;
 use ghost_raytrace::ghosts;
@@ -27,7 +40,7 @@ use super::render::{IrisArgs, StarburstArgs, StarburstMode};
 use crate::compose::{StarburstLine, StarburstSetup, add_onto, add_starbursts};
 use crate::input_image::read_input_image;
 use crate::lens_library;
-use crate::output::{ExrPrecision, ToneMap, ToneOperator, save_image_as};
+use crate::output::{ExrPrecision, OutputFormat, ToneMap, ToneOperator, save_image_as};
 use crate::sources::{Source, direction_of, find_sources};
 
 #[derive(Debug, Args)]
@@ -47,9 +60,10 @@ pub struct ApplyArgs {
     /// At most this many sources, the brightest.
     #[arg(long, default_value_t = 8)]
     pub max_lights: usize,
-    /// Multiplies each source's energy (clipped 8-bit sources need more than 1).
-    #[arg(long, default_value_t = 1.0)]
-    pub gain: f64,
+    /// Multiplies each source's energy. Default: 1 for EXR input; for 8-bit input 2^10, a
+    /// clipped source being taken as 10 stops brighter than its pixels.
+    #[arg(long)]
+    pub gain: Option<f64>,
     /// Film width (mm) the image spans (default: the lens file's).
     #[arg(long)]
     pub film_width_mm: Option<f64>,
@@ -80,6 +94,8 @@ struct AppliedLight {
     source: Source,
     theta_deg: f64,
     phi_deg: f64,
+    /// The factor the source's energy was multiplied by.
+    gain: f64,
     intensity: f64,
 }
 
@@ -97,6 +113,9 @@ struct ApplyReport {
     skipped: Vec<(Source, String)>,
     starbursts: Vec<StarburstLine>,
     ghosts_traced: usize,
+    /// With a PNG output: how many pixels away from the lights ([`AWAY_FROM_LIGHT_PX`]) the
+    /// flare changes by at least one 8-bit step (`null` for EXR output).
+    changed_pixels: Option<usize>,
 }
 
 pub fn run(args: &ApplyArgs, quiet: bool) -> anyhow::Result<()> {
@@ -104,10 +123,14 @@ pub fn run(args: &ApplyArgs, quiet: bool) -> anyhow::Result<()> {
     let sys = &loaded.system;
     let input = read_input_image(&args.image)?;
     let bg = &input.image;
+    let gain = match args.gain {
+        Some(g) => g,
+        None if input.hdr => 1.0,
+        None => CLIPPED_SOURCE_STOPS.exp2(),
+    };
     anyhow::ensure!(
-        args.gain.is_finite() && args.gain > 0.0,
-        "--gain must be positive, got {}",
-        args.gain
+        gain.is_finite() && gain > 0.0,
+        "--gain must be positive, got {gain}"
     );
     let film_w = args.film_width_mm.unwrap_or(sys.film_width_mm);
     anyhow::ensure!(
@@ -142,7 +165,7 @@ pub fn run(args: &ApplyArgs, quiet: bool) -> anyhow::Result<()> {
                     skipped.push((s, "no light reaches the sensor from there".to_string()));
                     continue;
                 }
-                let intensity = args.gain * s.energy / flux;
+                let intensity = gain * s.energy / flux;
                 let c = s.colour.map(|v| v.max(0.0) as f32);
                 let spectrum = if LightSpectrum::Rgb(c).validate().is_ok() {
                     LightSpectrum::Rgb(c)
@@ -159,6 +182,7 @@ pub fn run(args: &ApplyArgs, quiet: bool) -> anyhow::Result<()> {
                     source: s,
                     theta_deg,
                     phi_deg,
+                    gain,
                     intensity,
                 });
             }
@@ -206,6 +230,8 @@ pub fn run(args: &ApplyArgs, quiet: bool) -> anyhow::Result<()> {
         ExrPrecision::Float
     };
     save_image_as(&out, &args.output, &tone, precision)?;
+    let changed_pixels = (OutputFormat::from_path(&args.output)? == OutputFormat::Png)
+        .then(|| changed_away_from_lights(bg, &out, &applied, &tone));
 
     let report = ApplyReport {
         lens: sys.name.clone(),
@@ -216,6 +242,7 @@ pub fn run(args: &ApplyArgs, quiet: bool) -> anyhow::Result<()> {
         hdr: input.hdr,
         threshold,
         ghosts_traced: plans.iter().map(|p| p.ghosts.len()).sum(),
+        changed_pixels,
         lights: applied,
         skipped,
         starbursts,
@@ -225,11 +252,12 @@ pub fn run(args: &ApplyArgs, quiet: bool) -> anyhow::Result<()> {
     } else if !quiet {
         for l in &report.lights {
             eprintln!(
-                "light at pixel ({:.1}, {:.1}), {} px, energy {:.4e}: θ {:.3}°, φ {:.2}°",
+                "light at pixel ({:.1}, {:.1}), {} px, energy {:.4e} × gain {}: θ {:.3}°, φ {:.2}°",
                 l.source.centroid_px[0],
                 l.source.centroid_px[1],
                 l.source.pixels,
                 l.source.energy,
+                l.gain,
                 l.theta_deg,
                 l.phi_deg
             );
@@ -247,5 +275,43 @@ pub fn run(args: &ApplyArgs, quiet: bool) -> anyhow::Result<()> {
             report.ghosts_traced
         );
     }
+    if !quiet && !report.lights.is_empty() && report.changed_pixels == Some(0) {
+        eprintln!(
+            "warning: the flare changes no pixel more than {AWAY_FROM_LIGHT_PX} px from the \
+             lights by one 8-bit step (gain {gain}): raise --gain or --exposure-ev to see it"
+        );
+    }
     Ok(())
+}
+
+/// How far beyond a light's own radius a pixel must be to count as away from it (px): the
+/// starburst's core and the light's own glow lie within.
+pub const AWAY_FROM_LIGHT_PX: f64 = 12.0;
+
+/// Pixels away from every light (more than [`AWAY_FROM_LIGHT_PX`] beyond the radius of a disc
+/// of its area, from its centroid) whose 8-bit value under `tone` differs between `bg` and
+/// `out` in some channel.
+fn changed_away_from_lights(
+    bg: &HdrImage,
+    out: &HdrImage,
+    lights: &[AppliedLight],
+    tone: &ToneMap,
+) -> usize {
+    let w = bg.width;
+    let near = |k: usize| {
+        let (x, y) = ((k % w) as f64 + 0.5, (k / w) as f64 + 0.5);
+        lights.iter().any(|l| {
+            let [cx, cy] = l.source.centroid_px;
+            let r = (l.source.pixels as f64 / std::f64::consts::PI).sqrt() + AWAY_FROM_LIGHT_PX;
+            (x - cx).hypot(y - cy) <= r
+        })
+    };
+    bg.pixels
+        .iter()
+        .zip(&out.pixels)
+        .enumerate()
+        .filter(|&(k, (b, o))| {
+            (0..3).any(|c| tone.map_channel(b[c]) != tone.map_channel(o[c])) && !near(k)
+        })
+        .count()
 }
