@@ -12,6 +12,7 @@
 //! - [`color`]: spectral → colour (CIE 1931 observer, linear sRGB, light spectra, the
 //!   wavelengths a render samples and their RGB weights).
 //! - [`image`] and [`raster`]: linear HDR images and the exact-coverage CPU triangle rasterizer.
+//! - [`frame`]: the output image's pixels ↔ the part of the sensor it shows ([`Frame`]).
 //!
 //! Conventions (docs/ARCHITECTURE.md): millimetres, nanometres for wavelengths, radians inside;
 //! surfaces are listed object side first; curvature `c = 1/R` with `R > 0` meaning the centre of
@@ -21,6 +22,7 @@ pub mod abi;
 pub mod aperture;
 pub mod coating;
 pub mod color;
+pub mod frame;
 pub mod fresnel;
 pub mod ghost;
 pub mod glass;
@@ -33,5 +35,6 @@ pub mod starburst;
 pub mod system;
 pub mod trace;
 
+pub use frame::Frame;
 pub use glass::{Dispersion, GlassCatalog};
 pub use system::{Coating, LensSystem, Medium, Surface, SurfaceKind};

@@ -13,9 +13,9 @@ use std::path::PathBuf;
 
 use clap::Args;
 use flarebench_sdk::color::LightSpectrum;
+use flarebench_sdk::frame::Frame;
 use flarebench_sdk::ghost::GridTrace;
 use flarebench_sdk::ghost::bounds::direct_flux;
-use flarebench_sdk::ghost::render::Frame;
 use flarebench_sdk::starburst::StarburstCache;
 use flarebench_sdk::trace::InterfaceTableSet;
 use ghost_raytrace::ghosts;
