@@ -11,7 +11,7 @@ use flarebench_sdk::abi::host::{self, LoadedPlugin, PluginCallError, PluginLoadE
 use flarebench_sdk::abi::params::{ParamKind, defaults, parse_values};
 use flarebench_sdk::aperture::{Aperture, ApertureMask};
 use flarebench_sdk::color::LightSpectrum;
-use flarebench_sdk::ghost::render::Frame;
+use flarebench_sdk::frame::Frame;
 use flarebench_sdk::paraxial::analyse;
 use flarebench_sdk::spectrum::LAMBDA_D_NM;
 use flarebench_tests::{build_dir, load_lens, plugin_library};

@@ -13,6 +13,7 @@
 //! - [`color`]: spectral → colour (CIE 1931 observer, linear sRGB, light spectra, the
 //!   wavelengths a render samples and their RGB weights).
 //! - [`image`] and [`raster`]: linear HDR images and the exact-coverage CPU triangle rasterizer.
+//! - [`frame`]: the output image's pixels ↔ the part of the sensor it shows ([`Frame`]).
 //! - [`spectrum`]: the d, F and C line wavelengths.
 //! - [`ghost`]: ghost paths, their traced grids and bounds, bounds tables, the four-reflection
 //!   energy bound, and meshing a ghost for the rasterizer.
@@ -29,6 +30,7 @@ pub mod abi;
 pub mod aperture;
 pub mod coating;
 pub mod color;
+pub mod frame;
 pub mod fresnel;
 pub mod ghost;
 pub mod glass;
@@ -41,5 +43,6 @@ pub mod starburst;
 pub mod system;
 pub mod trace;
 
+pub use frame::Frame;
 pub use glass::{Dispersion, GlassCatalog};
 pub use system::{Coating, LensSystem, Medium, Surface, SurfaceKind};

@@ -5,12 +5,13 @@ use std::f64::consts::FRAC_PI_2;
 use std::path::Path;
 
 use flarebench_sdk::aperture::Aperture;
+use flarebench_sdk::frame::Frame;
 use flarebench_sdk::fresnel;
 use flarebench_sdk::ghost::bounds::{self, GhostBounds};
 use flarebench_sdk::ghost::fringe::mesh_ghost_fringed;
 use flarebench_sdk::ghost::render::{
-    Band, Frame, GhostContext, GhostLight, GhostMesh, GhostScratch, mesh_ghost,
-    rasterize_ghost_mesh, render_ghost,
+    Band, GhostContext, GhostLight, GhostMesh, GhostScratch, mesh_ghost, rasterize_ghost_mesh,
+    render_ghost,
 };
 use flarebench_sdk::ghost::{GhostPath, GridTrace, enumerate_ghosts};
 use flarebench_sdk::image::HdrImage;

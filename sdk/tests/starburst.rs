@@ -7,7 +7,7 @@ use std::path::Path;
 
 use flarebench_sdk::aperture::{Aperture, ApertureMask};
 use flarebench_sdk::color::{LightSpectrum, SpectralSampling};
-use flarebench_sdk::ghost::render::Frame;
+use flarebench_sdk::frame::Frame;
 use flarebench_sdk::image::HdrImage;
 use flarebench_sdk::io::read_lens;
 use flarebench_sdk::paraxial::analyse;

@@ -12,8 +12,8 @@
 
 use anyhow::{Context, Result, ensure};
 use flarebench_sdk::LensSystem;
+use flarebench_sdk::frame::Frame;
 use flarebench_sdk::ghost::GridTrace;
-use flarebench_sdk::ghost::render::Frame;
 use flarebench_sdk::image::HdrImage;
 use flarebench_sdk::starburst::{StarburstCache, StarburstLens, StarburstLight, StarburstSource};
 use ghost_raytrace::scene::LightSpec;

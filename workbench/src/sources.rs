@@ -17,7 +17,7 @@
 
 use anyhow::{Result, bail};
 use flarebench_sdk::LensSystem;
-use flarebench_sdk::ghost::render::Frame;
+use flarebench_sdk::frame::Frame;
 use flarebench_sdk::image::HdrImage;
 use flarebench_sdk::paraxial::analyse;
 use flarebench_sdk::spectrum::LAMBDA_D_NM;

@@ -217,7 +217,7 @@ fn the_starburst_plugin_renders_what_render_composes() {
     use flarebench_sdk::abi::host;
     use flarebench_sdk::abi::params::parse_values;
     use flarebench_sdk::aperture::Aperture;
-    use flarebench_sdk::ghost::render::Frame;
+    use flarebench_sdk::frame::Frame;
     use flarebench_sdk::image::HdrImage;
     use flarebench_sdk::starburst::{StarburstCache, StarburstSettings};
     use ghost_raytrace::scene::LightSpec;
@@ -332,7 +332,7 @@ fn the_ghost_plugin_renders_what_the_library_renders() {
     use flarebench_sdk::abi::host;
     use flarebench_sdk::abi::params::parse_values;
     use flarebench_sdk::aperture::Aperture;
-    use flarebench_sdk::ghost::render::Frame;
+    use flarebench_sdk::frame::Frame;
     use flarebench_sdk::image::HdrImage;
     use ghost_raytrace::plan::{self, PlanOptions};
     use ghost_raytrace::scene::{LightSpec, Quality};
@@ -395,7 +395,7 @@ fn the_ghost_plugin_renders_a_mask_aperture_and_an_rgb_light_as_the_library_does
     use flarebench_sdk::abi::params::parse_values;
     use flarebench_sdk::aperture::Aperture;
     use flarebench_sdk::color::LightSpectrum;
-    use flarebench_sdk::ghost::render::Frame;
+    use flarebench_sdk::frame::Frame;
     use ghost_raytrace::plan::{self, PlanOptions};
     use ghost_raytrace::scene::{LightSpec, Quality};
 

@@ -7,7 +7,7 @@ use std::path::Path;
 
 use common::{flarebench, json, temp_dir};
 use flarebench::output::{ToneMap, read_exr, save_image};
-use flarebench_sdk::ghost::render::Frame;
+use flarebench_sdk::frame::Frame;
 use flarebench_sdk::image::HdrImage;
 use flarebench_sdk::io::read_lens;
 use flarebench_sdk::starburst::chief_ray_landing;

@@ -4,7 +4,7 @@
 use flarebench_sdk::abi::author::{Scene, SceneLight};
 use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::color::{LightSpectrum, SpectralSampling};
-use flarebench_sdk::ghost::render::Frame;
+use flarebench_sdk::frame::Frame;
 use flarebench_sdk::ghost::{GhostPath, enumerate_ghosts};
 use flarebench_sdk::image::HdrImage;
 use flarebench_sdk::io::read_lens;

@@ -17,7 +17,7 @@ use flarebench_sdk::abi::author::Scene;
 use flarebench_sdk::abi::host;
 use flarebench_sdk::abi::params::parse_values;
 use flarebench_sdk::aperture::Aperture;
-use flarebench_sdk::ghost::render::Frame;
+use flarebench_sdk::frame::Frame;
 use flarebench_sdk::image::HdrImage;
 use flarebench_sdk::io::read_lens;
 use ghost_raytrace::ghosts;

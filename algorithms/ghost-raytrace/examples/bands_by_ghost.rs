@@ -13,8 +13,8 @@
 use std::path::Path;
 
 use flarebench_sdk::aperture::Aperture;
+use flarebench_sdk::frame::Frame;
 use flarebench_sdk::ghost::ReflectionOrder;
-use flarebench_sdk::ghost::render::Frame;
 use flarebench_sdk::image::HdrImage;
 use flarebench_sdk::io::read_lens;
 use ghost_raytrace::ghosts::{self, RenderOptions};

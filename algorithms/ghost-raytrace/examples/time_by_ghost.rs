@@ -16,7 +16,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use flarebench_sdk::aperture::Aperture;
-use flarebench_sdk::ghost::render::Frame;
+use flarebench_sdk::frame::Frame;
 use flarebench_sdk::io::read_lens;
 use ghost_raytrace::ghosts;
 use ghost_raytrace::plan::{self, LightPlan, PlanOptions};

@@ -14,11 +14,11 @@
 
 use flarebench_sdk::LensSystem;
 use flarebench_sdk::aperture::Aperture;
+use flarebench_sdk::frame::Frame;
 use flarebench_sdk::ghost::GridTrace;
 use flarebench_sdk::ghost::fringe::mesh_ghost_fringed;
 use flarebench_sdk::ghost::render::{
-    BandRef, Frame, GhostContext, GhostLight, GhostMesh, GhostStats, mesh_ghost,
-    rasterize_ghost_mesh_into,
+    BandRef, GhostContext, GhostLight, GhostMesh, GhostStats, mesh_ghost, rasterize_ghost_mesh_into,
 };
 use flarebench_sdk::image::{
     Blend, CoarseGrid, HdrImage, RowSpans, SpannedLevel, row_spans, upsample_spans_into,

@@ -18,8 +18,9 @@
 
 use flarebench_sdk::LensSystem;
 use flarebench_sdk::color::SpectralSampling;
+use flarebench_sdk::frame::Frame;
 use flarebench_sdk::ghost::bounds::{self, GhostBounds, MAX_GRID, MIN_GRID};
-use flarebench_sdk::ghost::render::{Band, Frame};
+use flarebench_sdk::ghost::render::Band;
 use flarebench_sdk::ghost::table::BoundsTable;
 use flarebench_sdk::ghost::{
     FourReflectionBounds, GhostPath, GridTrace, Rect, ReflectionOrder, enumerate_ghosts_of_order,

@@ -18,8 +18,8 @@
 
 use flarebench_sdk::LensSystem;
 use flarebench_sdk::aperture::Aperture;
+use flarebench_sdk::frame::Frame;
 use flarebench_sdk::ghost::ReflectionOrder;
-use flarebench_sdk::ghost::render::Frame;
 use flarebench_sdk::ghost::table::fingerprint;
 use flarebench_sdk::image::HdrImage;
 

@@ -4,8 +4,8 @@
 
 use flarebench_sdk::LensSystem;
 use flarebench_sdk::aperture::Aperture;
+use flarebench_sdk::frame::Frame;
 use flarebench_sdk::ghost::bounds::{self, BoundsMode};
-use flarebench_sdk::ghost::render::Frame;
 use flarebench_sdk::ghost::table::{BoundsTable, TableOptions};
 use flarebench_sdk::ghost::{
     FourReflectionBounds, GridTrace, ReflectionOrder, enumerate_four_reflection_ghosts,

@@ -7,9 +7,9 @@ use std::path::{Path, PathBuf};
 
 use flarebench_sdk::LensSystem;
 use flarebench_sdk::aperture::Aperture;
+use flarebench_sdk::frame::Frame;
 use flarebench_sdk::ghost::GridTrace;
 use flarebench_sdk::ghost::bounds;
-use flarebench_sdk::ghost::render::Frame;
 use flarebench_sdk::io::read_lens;
 use flarebench_sdk::paraxial::analyse;
 use flarebench_sdk::trace::InterfaceTableSet;

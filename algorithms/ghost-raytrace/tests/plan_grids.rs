@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use flarebench_sdk::ghost::render::Frame;
+use flarebench_sdk::frame::Frame;
 use flarebench_sdk::io::read_lens;
 use ghost_raytrace::plan::{self, PlanOptions, SMOOTH_GRID};
 use ghost_raytrace::scene::{LightSpec, Quality};

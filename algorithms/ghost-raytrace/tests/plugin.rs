@@ -7,7 +7,7 @@ use flarebench_sdk::abi::author::{Scene, SceneLight};
 use flarebench_sdk::abi::host;
 use flarebench_sdk::abi::params::parse_values;
 use flarebench_sdk::aperture::Aperture;
-use flarebench_sdk::ghost::render::Frame;
+use flarebench_sdk::frame::Frame;
 use flarebench_sdk::io::read_lens;
 use ghost_raytrace::plan::{self, PlanOptions};
 use ghost_raytrace::scene::{LightSpec, Quality};

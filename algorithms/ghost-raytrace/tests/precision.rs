@@ -1,7 +1,7 @@
 //! Ghost images traced in f32 agree with the same images traced in f64.
 
 use flarebench_sdk::aperture::Aperture;
-use flarebench_sdk::ghost::render::Frame;
+use flarebench_sdk::frame::Frame;
 use flarebench_sdk::io::read_lens;
 use ghost_raytrace::ghosts::{RenderOptions, render_with};
 use ghost_raytrace::plan::{PlanOptions, plan};

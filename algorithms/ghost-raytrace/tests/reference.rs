@@ -7,8 +7,8 @@
 
 use flarebench_sdk::LensSystem;
 use flarebench_sdk::aperture::Aperture;
+use flarebench_sdk::frame::Frame;
 use flarebench_sdk::ghost::ReflectionOrder;
-use flarebench_sdk::ghost::render::Frame;
 use flarebench_sdk::io::read_lens;
 use ghost_raytrace::ghosts;
 use ghost_raytrace::plan::LightPlan;

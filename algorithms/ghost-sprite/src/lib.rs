@@ -90,7 +90,7 @@ pub struct GhostSprite {
 /// Pixel position of the paraxial image of a light at (`theta_deg`, `phi_deg`).
 pub fn light_image_px(
     efl_mm: f64,
-    frame: &flarebench_sdk::ghost::render::Frame,
+    frame: &flarebench_sdk::frame::Frame,
     theta_deg: f64,
     phi_deg: f64,
 ) -> [f64; 2] {

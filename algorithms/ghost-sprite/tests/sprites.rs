@@ -4,7 +4,7 @@
 use flarebench_sdk::abi::author::{Scene, SceneLight};
 use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::color::LightSpectrum;
-use flarebench_sdk::ghost::render::Frame;
+use flarebench_sdk::frame::Frame;
 use flarebench_sdk::image::HdrImage;
 use ghost_sprite::{SPRITES, draw, light_image_px};
 

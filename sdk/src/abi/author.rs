@@ -7,7 +7,7 @@ use std::fmt;
 use crate::LensSystem;
 use crate::aperture::Aperture;
 use crate::color::LightSpectrum;
-use crate::ghost::render::Frame;
+use crate::frame::Frame;
 use crate::image::HdrImage;
 
 use super::v1;

@@ -12,7 +12,7 @@ use std::sync::OnceLock;
 use crate::LensSystem;
 use crate::aperture::{Aperture, ApertureMask, check_mask_size};
 use crate::color::LightSpectrum;
-use crate::ghost::render::Frame;
+use crate::frame::Frame;
 use crate::io::parse_olf_xml;
 
 use super::author::{FlarePlugin, Mesh, Output, ParamSpec, ParamType, Params, Scene, SceneLight};

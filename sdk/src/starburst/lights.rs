@@ -12,9 +12,9 @@
 use crate::LensSystem;
 use crate::aperture::{Aperture, ApertureMask};
 use crate::color::LightSpectrum;
+use crate::frame::Frame;
 use crate::ghost::GridTrace;
 use crate::ghost::bounds::direct_flux;
-use crate::ghost::render::Frame;
 use crate::image::HdrImage;
 use crate::paraxial::{ParaxialError, analyse};
 use crate::spectrum::LAMBDA_D_NM;

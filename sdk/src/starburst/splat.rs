@@ -12,7 +12,7 @@
 //! **Units.** Image pixels hold flux (as the ghost renderer's do): a pattern of luminance sum
 //! 1 times `flux` adds `flux` to the image's luminance sum when it lies wholly in the frame.
 
-use crate::ghost::render::Frame;
+use crate::frame::Frame;
 use crate::image::HdrImage;
 
 use super::{StarburstError, StarburstPattern};

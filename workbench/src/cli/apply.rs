@@ -25,9 +25,9 @@ pub const CLIPPED_SOURCE_STOPS: f64 = 10.0;
 
 use clap::Args;
 use flarebench_sdk::color::LightSpectrum;
+use flarebench_sdk::frame::Frame;
 use flarebench_sdk::ghost::GridTrace;
 use flarebench_sdk::ghost::bounds::direct_flux;
-use flarebench_sdk::ghost::render::Frame;
 use flarebench_sdk::image::HdrImage;
 use flarebench_sdk::starburst::StarburstCache;
 use flarebench_sdk::trace::InterfaceTableSet;

@@ -10,7 +10,7 @@ use clap::Args;
 use flarebench_sdk::abi::author::Scene;
 use flarebench_sdk::abi::host::LoadedPlugin;
 use flarebench_sdk::abi::params::parse_values;
-use flarebench_sdk::ghost::render::Frame;
+use flarebench_sdk::frame::Frame;
 use flarebench_sdk::image::HdrImage;
 use ghost_raytrace::scene::LightSpec;
 use serde::Serialize;

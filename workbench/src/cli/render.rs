@@ -7,7 +7,7 @@ use std::time::Instant;
 use anyhow::Context;
 use clap::Args;
 use flarebench_sdk::aperture::{Aperture, ApertureMask};
-use flarebench_sdk::ghost::render::Frame;
+use flarebench_sdk::frame::Frame;
 use flarebench_sdk::starburst::{StarburstCache, StarburstSettings};
 
 use ghost_raytrace::plan::PlanOptions;
