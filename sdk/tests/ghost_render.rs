@@ -8,11 +8,10 @@ use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::frame::Frame;
 use flarebench_sdk::fresnel;
 use flarebench_sdk::ghost::bounds::{self, GhostBounds};
+use flarebench_sdk::ghost::context::{Band, GhostContext, GhostLight};
 use flarebench_sdk::ghost::fringe::mesh_ghost_fringed;
-use flarebench_sdk::ghost::render::{
-    Band, GhostContext, GhostLight, GhostMesh, GhostScratch, mesh_ghost, rasterize_ghost_mesh,
-    render_ghost,
-};
+use flarebench_sdk::ghost::mesh::GhostMesh;
+use flarebench_sdk::ghost::render::{GhostScratch, mesh_ghost, rasterize_ghost_mesh, render_ghost};
 use flarebench_sdk::ghost::{GhostPath, GridTrace, enumerate_ghosts};
 use flarebench_sdk::image::HdrImage;
 use flarebench_sdk::io::read_lens;

@@ -5,7 +5,7 @@ use serde::Serialize;
 use crate::compose::StarburstLine;
 
 use flarebench_sdk::ghost::ReflectionOrder;
-use flarebench_sdk::ghost::render::GhostStats;
+use flarebench_sdk::ghost::context::GhostStats;
 use ghost_raytrace::plan::{DropReason, FourReflectionSummary, LightPlan};
 
 /// Time spent per stage (milliseconds).

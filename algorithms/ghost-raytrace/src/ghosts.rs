@@ -16,10 +16,10 @@ use flarebench_sdk::LensSystem;
 use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::frame::Frame;
 use flarebench_sdk::ghost::GridTrace;
+use flarebench_sdk::ghost::context::{BandRef, GhostContext, GhostLight, GhostStats};
 use flarebench_sdk::ghost::fringe::mesh_ghost_fringed;
-use flarebench_sdk::ghost::render::{
-    BandRef, GhostContext, GhostLight, GhostMesh, GhostStats, mesh_ghost, rasterize_ghost_mesh_into,
-};
+use flarebench_sdk::ghost::mesh::GhostMesh;
+use flarebench_sdk::ghost::render::{mesh_ghost, rasterize_ghost_mesh_into};
 use flarebench_sdk::image::{
     Blend, CoarseGrid, HdrImage, RowSpans, SpannedLevel, row_spans, upsample_spans_into,
 };

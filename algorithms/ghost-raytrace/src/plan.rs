@@ -20,7 +20,7 @@ use flarebench_sdk::LensSystem;
 use flarebench_sdk::color::SpectralSampling;
 use flarebench_sdk::frame::Frame;
 use flarebench_sdk::ghost::bounds::{self, GhostBounds, MAX_GRID, MIN_GRID};
-use flarebench_sdk::ghost::render::Band;
+use flarebench_sdk::ghost::context::Band;
 use flarebench_sdk::ghost::table::BoundsTable;
 use flarebench_sdk::ghost::{
     FourReflectionBounds, GhostPath, GridTrace, Rect, ReflectionOrder, enumerate_ghosts_of_order,
@@ -658,7 +658,7 @@ pub const COARSE_PIXELS_PER_CELL: f64 = 4.0;
 /// largest power of two, at most `max`, whose coarse pixel is no larger than a
 /// [`COARSE_PIXELS_PER_CELL`]th of a grid cell on the sensor nor than a `per_radius`th of the
 /// ghost's radius. The ghost's edge is one drawn pixel wide
-/// (`flarebench_sdk::ghost::render::EDGE_PIXELS`), so a coarser frame blurs it over `factor`
+/// (`flarebench_sdk::ghost::triangles::EDGE_PIXELS`), so a coarser frame blurs it over `factor`
 /// output pixels, which touches about `factor / radius` of the ghost's area
 /// ([`Quality::coarse_pixels_per_radius`]).
 pub fn coarse_factor(sensor: &Rect, n: usize, frame: &Frame, max: usize, per_radius: f64) -> usize {

@@ -7,22 +7,34 @@
 //!   and incidence angle (approximate paraxial and precise traced modes).
 //! - [`four_bound`]: the traced upper bound on four-reflection paths' energy shares (one
 //!   trace per three-reflection prefix) that culls them before their bounds are traced.
-//! - [`render`]: one ghost into an HDR image — triangles with energy-conserving intensities,
-//!   the aperture's shape at the stop, feathered clipping, the diffraction-limit caustic bound.
+//! - [`context`]: what the renderer works from (lens context, light, wavelength bands) and
+//!   what it reports (`GhostStats`).
+//! - [`triangles`]: a traced band's grid cells as triangles with energy-conserving
+//!   intensities, the diffraction-limit caustic bound, the feathered edge's width.
+//! - [`mesh`]: ghost triangles ready to rasterize (open, edge and fringed meshes).
+//! - `row_split`: where along a rasterized row a shade is zero or open, shared by the
+//!   shaders.
+//! - [`render`]: one ghost into an HDR image — mesh its bands, rasterize with the aperture's
+//!   shape at the stop and feathered clipping.
 //! - [`fringe`]: all of a dispersive ghost's bands as one mesh, its colour fringes shaded per
-//!   pixel.
+//!   pixel; [`fringe_table`]: the ghost's colour over the dispersion coordinate it looks up.
 //! - [`table`]: bounds precomputed over a range of angles, stored and interpolated.
 //! - [`olf_table`]: OpenLensFlare's precomputed bounds (`<ghostList>` XML) as such a table,
 //!   checked against the lens, energies traced.
 
 pub mod bounds;
+pub mod context;
 pub mod enumerate;
 pub mod four_bound;
 pub mod fringe;
+pub mod fringe_table;
 pub mod grid;
+pub mod mesh;
 pub mod olf_table;
 pub mod render;
+mod row_split;
 pub mod table;
+pub mod triangles;
 
 pub use bounds::{GhostBounds, Rect};
 pub use enumerate::{

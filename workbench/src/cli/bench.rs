@@ -30,7 +30,8 @@ pub struct BenchArgs {
     /// Lens files or bundled lens names.
     #[arg(default_values_t = ["heliar-tronnier".to_string(), "nikon-zoom-short".to_string()])]
     pub lenses: Vec<String>,
-    /// The light: THETA,PHI[,INTENSITY[,KELVIN]].
+    /// The light: THETA,PHI[,INTENSITY[,KELVIN]] (degrees; PHI counter-clockwise from the
+    /// image's downward direction: 0 below the centre, 90 right of it).
     #[arg(long, default_value = "10,30", value_parser = LightSpec::parse)]
     pub light: LightSpec,
     /// Frame size, WxH.

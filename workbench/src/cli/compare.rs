@@ -29,7 +29,9 @@ use flarebench_sdk::ghost::ReflectionOrder;
 pub struct CompareArgs {
     /// Lens file or the name of a bundled lens.
     pub lens: String,
-    /// A light at infinity: THETA,PHI[,INTENSITY[,KELVIN]] (degrees; repeatable).
+    /// A light at infinity: THETA,PHI[,INTENSITY[,KELVIN]] (degrees; repeatable). PHI turns
+    /// counter-clockwise from the image's downward direction: 0 images the light below the
+    /// centre, 90 right of it, 180 above, 270 left.
     #[arg(long = "light", required = true, value_parser = LightSpec::parse)]
     pub lights: Vec<LightSpec>,
     /// An algorithm: a plugin name (or library path), optionally with parameters,

@@ -29,7 +29,9 @@ pub struct RenderArgs {
     /// Lens file or the name of a bundled lens.
     pub lens: String,
     /// A light at infinity: THETA,PHI[,INTENSITY[,COLOUR]] — angle to the axis and azimuth in
-    /// degrees, irradiance (default 1), colour as a blackbody temperature in kelvin (e.g.
+    /// degrees (PHI turns counter-clockwise from the image's downward direction: its image
+    /// lies below the centre at 0, right of it at 90, above at 180, left at 270), irradiance
+    /// (default 1), colour as a blackbody temperature in kelvin (e.g.
     /// 3200) or linear sRGB R:G:B (e.g. 1:0.8:0.6); default daylight D65. Repeat for several
     /// lights.
     #[arg(long = "light", required_unless_present = "lights_at", value_parser = LightSpec::parse)]

@@ -1,0 +1,178 @@
+//! The README's transcripts stay true: every `flarebench` command of a `console` block runs as
+//! written (in a temporary directory, one directory per block, commands in order) and its
+//! output (standard output, then standard error) must match the transcript in shape — the same lines, with every number, path and
+//! run of spaces left free. A line `…` in a transcript stands for any number of lines.
+
+mod common;
+
+use std::path::Path;
+use std::process::Command;
+
+use common::temp_dir;
+
+/// Commands that cannot run here as written, with the reason.
+const SKIPPED: [(&str, &str); 3] = [
+    ("flarebench edit", "interactive (tested in edit_tmux.rs)"),
+    ("scene.exr", "the user's own image"),
+    ("bad.xml", "the user's own broken file"),
+];
+
+/// The fewest commands the README must have that run here.
+const MIN_CHECKED: usize = 8;
+
+struct Transcript {
+    /// README line of the command.
+    line: usize,
+    args: Vec<String>,
+    expected: Vec<String>,
+}
+
+/// The console blocks' commands, grouped by block.
+fn blocks(readme: &str) -> Vec<Vec<Transcript>> {
+    let mut out = Vec::new();
+    let mut lines = readme.lines().enumerate().peekable();
+    while let Some((_, l)) = lines.next() {
+        if l.trim() != "```console" {
+            continue;
+        }
+        let mut block: Vec<Transcript> = Vec::new();
+        while let Some((n, l)) = lines.next() {
+            if l.trim() == "```" {
+                break;
+            }
+            if let Some(cmd) = l.strip_prefix("$ ") {
+                let mut cmd = cmd.to_string();
+                while cmd.ends_with('\\') {
+                    cmd.pop();
+                    let (_, next) = lines.next().expect("a continued command goes on");
+                    cmd.push(' ');
+                    cmd.push_str(next.trim());
+                }
+                let cmd = cmd.split(" #").next().unwrap_or_default();
+                let cmd = cmd.replace("cargo run --release -p flarebench --", "flarebench");
+                block.push(Transcript {
+                    line: n + 1,
+                    args: cmd.split_whitespace().map(str::to_string).collect(),
+                    expected: Vec::new(),
+                });
+            } else if let Some(t) = block.last_mut() {
+                t.expected.push(l.to_string());
+            }
+        }
+        out.push(block);
+    }
+    out
+}
+
+/// A line with its numbers as `#`, paths as `<path>` and runs of spaces as one.
+fn shape(line: &str) -> String {
+    let words: Vec<String> = line
+        .split_whitespace()
+        .map(|w| {
+            if w.contains('/') && w.chars().any(|c| c.is_ascii_alphabetic()) && !w.contains(":/") {
+                return "<path>".to_string();
+            }
+            let mut s = String::new();
+            let c: Vec<char> = w.chars().collect();
+            let mut i = 0;
+            while i < c.len() {
+                let sign = (c[i] == '-' || c[i] == '+')
+                    && c.get(i + 1).is_some_and(char::is_ascii_digit)
+                    && (i == 0 || !c[i - 1].is_ascii_alphanumeric());
+                if c[i].is_ascii_digit() || sign {
+                    i += 1;
+                    while i < c.len() {
+                        let exp = (c[i] == 'e' || c[i] == 'E')
+                            && c.get(i + 1)
+                                .is_some_and(|d| d.is_ascii_digit() || *d == '-' || *d == '+');
+                        if c[i].is_ascii_digit() || c[i] == '.' {
+                            i += 1;
+                        } else if exp {
+                            i += 2;
+                        } else {
+                            break;
+                        }
+                    }
+                    s.push('#');
+                } else {
+                    s.push(c[i]);
+                    i += 1;
+                }
+            }
+            s
+        })
+        .collect();
+    words.join(" ")
+}
+
+/// Whether `actual` matches `expected` in shape, `…` lines matching any run of lines.
+fn matches(expected: &[String], actual: &[String]) -> bool {
+    match expected.split_first() {
+        None => actual.is_empty(),
+        Some((e, rest)) if e.trim() == "…" => {
+            (0..=actual.len()).any(|k| matches(rest, &actual[k..]))
+        }
+        Some((e, rest)) => {
+            actual.first().is_some_and(|a| shape(a) == shape(e)) && matches(rest, &actual[1..])
+        }
+    }
+}
+
+#[test]
+fn the_readme_transcripts_match_the_binary_in_shape() {
+    let readme =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../README.md"))
+            .unwrap();
+    let mut checked = 0;
+    let mut failures = Vec::new();
+    for block in blocks(&readme) {
+        let tmp = temp_dir("readme");
+        for t in block {
+            let cmd = t.args.join(" ");
+            if t.args.first().map(String::as_str) != Some("flarebench")
+                || SKIPPED.iter().any(|(s, _)| cmd.contains(s))
+            {
+                continue;
+            }
+            let out = Command::new(env!("CARGO_BIN_EXE_flarebench"))
+                .args(&t.args[1..])
+                .current_dir(tmp.path())
+                .output()
+                .unwrap();
+            // Standard output, then standard error (where `precompute` and `apply` report).
+            let actual: Vec<String> = String::from_utf8_lossy(&out.stdout)
+                .lines()
+                .chain(String::from_utf8_lossy(&out.stderr).lines())
+                .map(str::to_string)
+                .collect();
+            if !matches(&t.expected, &actual) {
+                failures.push(format!(
+                    "README.md:{} `{cmd}`\n--- transcript\n{}\n--- output\n{}\n--- stderr\n{}",
+                    t.line,
+                    t.expected.join("\n"),
+                    actual.join("\n"),
+                    String::from_utf8_lossy(&out.stderr)
+                ));
+            }
+            checked += 1;
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n\n"));
+    assert!(checked >= MIN_CHECKED, "{checked} commands checked");
+}
+
+#[test]
+fn the_shape_frees_numbers_and_paths_but_not_words() {
+    assert_eq!(
+        shape("  ghost    7-6: energy 2.699e-4, grid 17², drawn at 1/4"),
+        shape("ghost 3-2: energy 3.086e-4, grid 13², drawn at 1/1")
+    );
+    assert_eq!(shape("error -0.141% (/a/b.xml)"), "error #% <path>");
+    assert_ne!(
+        shape("starburst of light 0: left out (off frame)"),
+        shape("starburst of light 0 at pixel (53.8, 30.6)")
+    );
+    let e = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+    assert!(matches(&e(&["a 1", "…", "z"]), &e(&["a 2", "b", "c", "z"])));
+    assert!(!matches(&e(&["a 1", "z"]), &e(&["a 2", "b", "z"])));
+}
