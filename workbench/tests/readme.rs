@@ -1,6 +1,6 @@
 //! The README's transcripts stay true: every `flarebench` command of a `console` block runs as
 //! written (in a temporary directory, one directory per block, commands in order) and its
-//! output (standard output, then standard error) must match the transcript in shape — the same lines, with every number, path and
+//! output (standard output, or standard error when there is none) must match the transcript in shape — the same lines, with every number, path and
 //! run of spaces left free. A line `…` in a transcript stands for any number of lines.
 
 mod common;
@@ -139,10 +139,15 @@ fn the_readme_transcripts_match_the_binary_in_shape() {
                 .current_dir(tmp.path())
                 .output()
                 .unwrap();
-            // Standard output, then standard error (where `precompute` and `apply` report).
-            let actual: Vec<String> = String::from_utf8_lossy(&out.stdout)
+            // Standard output; standard error for a command that reports there (`precompute`)
+            // and prints nothing on standard output.
+            let stream = if out.stdout.is_empty() {
+                &out.stderr
+            } else {
+                &out.stdout
+            };
+            let actual: Vec<String> = String::from_utf8_lossy(stream)
                 .lines()
-                .chain(String::from_utf8_lossy(&out.stderr).lines())
                 .map(str::to_string)
                 .collect();
             if !matches(&t.expected, &actual) {

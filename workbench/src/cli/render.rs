@@ -94,8 +94,9 @@ pub struct RenderArgs {
     /// Output image: .exr (linear, float) or .png (tone mapped).
     #[arg(short, long)]
     pub output: PathBuf,
-    /// PNG exposure in stops; default: automatic, so the brightest 0.1% of the flare's pixels
-    /// reach white.
+    /// PNG exposure in stops; default: automatic, so the brightest 0.1% of the ghosts' pixels
+    /// reach a quarter of white (without ghosts: the brightest 0.1% of the image reach white):
+    /// a light in the frame clips, as in a photograph that shows its flare.
     #[arg(long, allow_negative_numbers = true)]
     pub exposure_ev: Option<f32>,
     /// PNG tone curve (default aces; clamp with --background).
@@ -387,6 +388,12 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
         None
     };
 
+    // The automatic exposure is the ghosts' (when some are drawn), taken before the starbursts
+    // are added: a light in the frame is far brighter than its ghosts, and a photograph that
+    // shows the flare lets the light itself clip.
+    let ghost_exposure = (background.is_none() && args.exposure_ev.is_none())
+        .then(|| lit_exposure(&img).map(|ev| ev + GHOST_HEADROOM_EV))
+        .flatten();
     // Starbursts after the reference comparison, which is of the ghosts alone.
     let t = Instant::now();
     let starbursts = if mode == StarburstMode::Off {
@@ -409,7 +416,9 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
             args.tone.unwrap_or(ToneOperator::Clamp),
         ),
         None => (
-            args.exposure_ev.unwrap_or_else(|| auto_exposure(&img)),
+            args.exposure_ev
+                .or(ghost_exposure)
+                .unwrap_or_else(|| auto_exposure(&img)),
             args.tone.unwrap_or(ToneOperator::Aces),
         ),
     };
@@ -465,6 +474,16 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
 /// Exposure (stops) that maps the 99.9th percentile of the lit pixels' luminance to 1;
 /// 0 for an empty image.
 pub(crate) fn auto_exposure(img: &flarebench_sdk::image::HdrImage) -> f32 {
+    lit_exposure(img).unwrap_or(0.0)
+}
+
+/// Stops the automatic exposure leaves above the brightest 0.1% of the ghosts' pixels: they
+/// land at a quarter of white, so ghosts that overlap stay translucent and keep their colour
+/// through the tone curve (at 0 the Heliar's ghosts for a light at 8°, 60° wash the frame out).
+const GHOST_HEADROOM_EV: f32 = -2.0;
+
+/// [`auto_exposure`], or `None` when no pixel is lit.
+fn lit_exposure(img: &flarebench_sdk::image::HdrImage) -> Option<f32> {
     let mut lum: Vec<f32> = img
         .pixels
         .iter()
@@ -472,9 +491,9 @@ pub(crate) fn auto_exposure(img: &flarebench_sdk::image::HdrImage) -> f32 {
         .filter(|&l| l > 0.0)
         .collect();
     if lum.is_empty() {
-        return 0.0;
+        return None;
     }
     let k = ((lum.len() as f64 * 0.999) as usize).min(lum.len() - 1);
     let (_, &mut p, _) = lum.select_nth_unstable_by(k, f32::total_cmp);
-    -p.log2()
+    Some(-p.log2())
 }
