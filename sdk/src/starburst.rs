@@ -33,6 +33,7 @@ pub use cache::StarburstCache;
 pub use chief_ray::{ChiefRayError, chief_ray_landing};
 pub use lights::{
     FLUX_LAMBDA_NM, StarburstLens, StarburstLight, StarburstOutcome, StarburstSource,
+    StarburstTarget,
 };
 pub use pattern::{StarburstPattern, TAPER_START, edge_window};
 pub use power::PowerSpectrum;

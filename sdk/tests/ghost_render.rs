@@ -8,7 +8,7 @@ use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::frame::Frame;
 use flarebench_sdk::fresnel;
 use flarebench_sdk::ghost::bounds::{self, GhostBounds};
-use flarebench_sdk::ghost::context::{Band, GhostContext, GhostLight};
+use flarebench_sdk::ghost::context::{Band, GhostContext, GhostGrid, GhostLight};
 use flarebench_sdk::ghost::fringe::mesh_ghost_fringed;
 use flarebench_sdk::ghost::mesh::GhostMesh;
 use flarebench_sdk::ghost::render::{GhostScratch, mesh_ghost, rasterize_ghost_mesh, render_ghost};
@@ -90,12 +90,15 @@ fn render_at(
     };
     let band = Band::new(sys, 550.0, [1.0, 1.0, 1.0]);
     let mut img = HdrImage::new(px, px);
+    let ghost = GhostGrid {
+        path,
+        bounds: &b,
+        n,
+        light,
+    };
     render_ghost(
         &ctx,
-        path,
-        &b,
-        n,
-        &light,
+        &ghost,
         &[band.as_ref()],
         &mut GhostScratch::default(),
         &mut img,
@@ -359,12 +362,15 @@ fn stiff_cases_stay_finite() {
             for path in enumerate_ghosts(sys).into_iter().step_by(7) {
                 if let Some(b) = bounds::precise(sys, path, &tables, theta, reference, &mut scratch)
                 {
+                    let ghost = GhostGrid {
+                        path,
+                        bounds: &b,
+                        n: 24,
+                        light,
+                    };
                     render_ghost(
                         &ctx,
-                        path,
-                        &b,
-                        24,
-                        &light,
+                        &ghost,
                         &[band.as_ref()],
                         &mut GhostScratch::default(),
                         &mut img,
@@ -429,28 +435,15 @@ fn both(
     let (bands, edges) = bands(sys, m);
     let refs: Vec<_> = bands.iter().map(Band::as_ref).collect();
     let mut fringed = GhostMesh::default();
-    mesh_ghost_fringed(
-        &ctx,
+    let ghost = GhostGrid {
         path,
-        &b,
+        bounds: &b,
         n,
-        &light,
-        &refs,
-        &edges,
-        &mut Vec::new(),
-        &mut fringed,
-    );
+        light,
+    };
+    mesh_ghost_fringed(&ctx, &ghost, &refs, &edges, &mut Vec::new(), &mut fringed);
     let mut one_by_one = GhostMesh::default();
-    mesh_ghost(
-        &ctx,
-        path,
-        &b,
-        n,
-        &light,
-        &refs,
-        &mut scratch,
-        &mut one_by_one,
-    );
+    mesh_ghost(&ctx, &ghost, &refs, &mut scratch, &mut one_by_one);
     let mut a = HdrImage::new(px, height);
     rasterize_ghost_mesh(&mut a, &fringed, &aperture);
     let mut c = HdrImage::new(px, height);

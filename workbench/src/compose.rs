@@ -15,7 +15,9 @@ use flarebench_sdk::LensSystem;
 use flarebench_sdk::frame::Frame;
 use flarebench_sdk::ghost::GridTrace;
 use flarebench_sdk::image::HdrImage;
-use flarebench_sdk::starburst::{StarburstCache, StarburstLens, StarburstLight, StarburstSource};
+use flarebench_sdk::starburst::{
+    StarburstCache, StarburstLens, StarburstLight, StarburstSource, StarburstTarget,
+};
 use ghost_raytrace::scene::LightSpec;
 use serde::Serialize;
 
@@ -53,6 +55,7 @@ pub fn add_starbursts(
     let lens = StarburstLens::new(system).context("paraxial analysis")?;
     let mut scratch = GridTrace::default();
     let mut lines = Vec::with_capacity(lights.len());
+    let mut target = StarburstTarget { img, frame };
     for (k, light) in lights.iter().enumerate() {
         let sl = StarburstLight {
             theta_deg: light.theta_deg,
@@ -61,7 +64,7 @@ pub fn add_starbursts(
             spectrum: light.spectrum,
         };
         let o = lens
-            .add(system, img, frame, &sl, setup, cache, &mut scratch)
+            .add(system, &mut target, &sl, setup, cache, &mut scratch)
             .context("starburst")?;
         let position_px = o
             .centre_mm

@@ -16,7 +16,7 @@ use flarebench_sdk::LensSystem;
 use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::frame::Frame;
 use flarebench_sdk::ghost::GridTrace;
-use flarebench_sdk::ghost::context::{BandRef, GhostContext, GhostLight, GhostStats};
+use flarebench_sdk::ghost::context::{BandRef, GhostContext, GhostGrid, GhostLight, GhostStats};
 use flarebench_sdk::ghost::fringe::mesh_ghost_fringed;
 use flarebench_sdk::ghost::mesh::GhostMesh;
 use flarebench_sdk::ghost::render::{mesh_ghost, rasterize_ghost_mesh_into};
@@ -342,6 +342,12 @@ fn render_groups(
                         phi: lp.light.phi_deg.to_radians(),
                         irradiance: 1.0,
                     };
+                    let ghost = GhostGrid {
+                        path: job.path,
+                        bounds: &job.bounds,
+                        n: job.grid,
+                        light,
+                    };
                     // Most triangles open (or fringed); the rest on an edge, band by band.
                     let mut mesh = GhostMesh::default();
                     mesh.open.reserve(triangles);
@@ -356,29 +362,10 @@ fn render_groups(
                         let edges: Vec<f64> = (range.start..=range.end)
                             .map(|i| bin_edge_nm(m, i))
                             .collect();
-                        mesh_ghost_fringed(
-                            ctx,
-                            job.path,
-                            &job.bounds,
-                            job.grid,
-                            &light,
-                            &bands,
-                            &edges,
-                            grids,
-                            &mut mesh,
-                        )
+                        mesh_ghost_fringed(ctx, &ghost, &bands, &edges, grids, &mut mesh)
                     } else {
                         mesh.edge.reserve(triangles / 2);
-                        mesh_ghost(
-                            ctx,
-                            job.path,
-                            &job.bounds,
-                            job.grid,
-                            &light,
-                            &[band(range.start)],
-                            grid,
-                            &mut mesh,
-                        )
+                        mesh_ghost(ctx, &ghost, &[band(range.start)], grid, &mut mesh)
                     };
                     (mesh, s)
                 },

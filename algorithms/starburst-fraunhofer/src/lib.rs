@@ -24,6 +24,7 @@ use flarebench_sdk::image::HdrImage;
 pub use flarebench_sdk::starburst::FLUX_LAMBDA_NM;
 use flarebench_sdk::starburst::{
     StarburstCache, StarburstLens, StarburstLight, StarburstSettings, StarburstSource,
+    StarburstTarget,
 };
 
 /// What `prepare` keeps of a lens.
@@ -124,6 +125,10 @@ impl FlarePlugin for StarburstFraunhofer {
             dust: None,
             settings,
         };
+        let mut target = StarburstTarget {
+            img: &mut img,
+            frame,
+        };
         let mut drawn = 0;
         for light in &scene.lights {
             let light = StarburstLight {
@@ -134,8 +139,7 @@ impl FlarePlugin for StarburstFraunhofer {
             };
             let o = p.starburst.add(
                 &p.lens,
-                &mut img,
-                frame,
+                &mut target,
                 &light,
                 &source,
                 &mut self.cache,

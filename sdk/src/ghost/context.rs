@@ -1,12 +1,15 @@
 //! What the ghost renderer works from and what it reports: the lens data fixed for a frame
-//! ([`GhostContext`]), the light ([`GhostLight`]), the wavelength bands ([`Band`], [`BandRef`])
-//! and the counts of a render ([`GhostStats`]).
+//! ([`GhostContext`]), the light ([`GhostLight`]), one ghost's grid to trace ([`GhostGrid`]),
+//! the wavelength bands ([`Band`], [`BandRef`]) and the counts of a render ([`GhostStats`]).
 
 use crate::aperture::Aperture;
 use crate::frame::Frame;
 use crate::system::LensSystem;
 use crate::trace::InterfaceTableSet;
 use std::sync::Arc;
+
+use super::bounds::GhostBounds;
+use super::enumerate::GhostPath;
 
 /// One wavelength band of a spectral render: where to trace and what colour it adds.
 #[derive(Clone, Debug)]
@@ -83,4 +86,14 @@ pub struct GhostContext<'a> {
     /// relative RMSE of 6e-6 (Heliar), 4.5e-4 (Nikon zoom), 1.6e-5 (fisheye at 60°)
     /// (`algorithms/ghost-raytrace/tests/precision.rs`).
     pub trace_f64: bool,
+}
+
+/// One ghost to trace: its path, lit by `light`, with an `n × n` grid over `bounds.entrance`.
+#[derive(Clone, Copy, Debug)]
+pub struct GhostGrid<'a> {
+    pub path: GhostPath,
+    pub bounds: &'a GhostBounds,
+    /// Grid vertices per side.
+    pub n: usize,
+    pub light: GhostLight,
 }

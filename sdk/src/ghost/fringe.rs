@@ -37,9 +37,7 @@
 use crate::aperture::Aperture;
 use crate::raster::{RowSplit, Shader};
 
-use super::bounds::GhostBounds;
-use super::context::{BandRef, GhostContext, GhostLight, GhostStats};
-use super::enumerate::GhostPath;
+use super::context::{BandRef, GhostContext, GhostGrid, GhostStats};
 use super::fringe_table::FringeTable;
 use super::grid::GridTrace;
 use super::mesh::GhostMesh;
@@ -460,25 +458,27 @@ impl Shader<12> for FringeShader<'_> {
     }
 }
 
-/// Traces `path` at every band of `bands` (at least two, over the bins whose edges in
+/// Traces `ghost` at every band of `bands` (at least two, over the bins whose edges in
 /// wavelength are `edges_nm`, one more than the bands) and appends one triangle per grid
 /// triangle where the bands' images follow the fringe model, and one per band elsewhere
 /// (`BandTriangles::push` in [`super::triangles`]) — for the whole ghost when that is more than
 /// [`MAX_FAILED_SHARE`] of its triangles. Only for the circular stop: another aperture
 /// (or fewer than two bands, or a colour whose channels cannot be split) is meshed band by
 /// band.
-#[allow(clippy::too_many_arguments)]
 pub fn mesh_ghost_fringed(
     ctx: &GhostContext<'_>,
-    path: GhostPath,
-    bounds: &GhostBounds,
-    n: usize,
-    light: &GhostLight,
+    ghost: &GhostGrid<'_>,
     bands: &[BandRef<'_>],
     edges_nm: &[f64],
     grids: &mut Vec<GridTrace>,
     mesh: &mut GhostMesh,
 ) -> GhostStats {
+    let GhostGrid {
+        path,
+        bounds,
+        n,
+        ref light,
+    } = *ghost;
     let m = bands.len();
     let mut stats = GhostStats::default();
     if grids.len() < m {
@@ -501,40 +501,8 @@ pub fn mesh_ghost_fringed(
             emit.push(tri, mesh, stats);
         }
     };
-    // The dispersion coordinate τ (1/λ², in which the geometry is nearly linear) of the
-    // bands. Each bin's colour is spread evenly over a span of τ as wide as its own but
-    // centred on its band, so that its fringe sits where its band was traced (1/λ² is convex:
-    // a bin's centre wavelength is not its span's middle); τ is then scaled so the spans
-    // cover [0, 1].
     let table = (edges_nm.len() == m + 1 && m >= 2 && matches!(ctx.aperture, Aperture::Circular))
-        .then(|| {
-            let inv = |l: f64| 1.0 / (l * l);
-            let raw: Vec<[f64; 2]> = bands
-                .iter()
-                .enumerate()
-                .map(|(b, band)| {
-                    let half = 0.5 * (inv(edges_nm[b]) - inv(edges_nm[b + 1])).abs();
-                    let c = inv(band.lambda_nm);
-                    [c - half, c + half]
-                })
-                .collect();
-            let lo = raw.iter().fold(f64::INFINITY, |a, s| a.min(s[0]));
-            let hi = raw.iter().fold(f64::NEG_INFINITY, |a, s| a.max(s[1]));
-            let tau = |t: f64| (t - lo) / (hi - lo);
-            let spans: Vec<[f64; 2]> = raw.iter().map(|s| s.map(tau)).collect();
-            let colours: Vec<[f64; 3]> = emits
-                .iter()
-                .map(|e| {
-                    let passed: f64 = (0..n * n)
-                        .filter(|&k| e.grid.passes(k))
-                        .map(|k| f64::from(e.grid.weight[k]))
-                        .sum();
-                    e.rgb.map(|c| f64::from(c) * passed)
-                })
-                .collect();
-            let centres: Vec<f64> = bands.iter().map(|b| tau(inv(b.lambda_nm))).collect();
-            FringeTable::new(&spans, &colours).map(|t| (t, centres))
-        })
+        .then(|| ghost_table(bands, edges_nm, &emits, n))
         .flatten();
     let Some((table, centres)) = table else {
         for tri in grid_triangles(n) {
@@ -544,95 +512,179 @@ pub fn mesh_ghost_fringed(
     };
     let id = mesh.fringe_tables.len() as f32;
     mesh.fringe_tables.push(table);
-    let model = LineFit::new(&centres);
-    let feather = emits[0].feather;
-    let tolerance = 0.25 * f64::from(feather);
-    let min_area = emits.iter().fold(0.0_f64, |a, e| a.max(e.min_area));
+    let mut fringer = Fringer::new(&emits, &centres, n, id);
     let (o0, e0, f0) = (mesh.open.len(), mesh.edge.len(), mesh.fringe.len());
     let mut failed = 0_usize;
-    let mut areas = vec![0.0_f64; m];
-    // Per band `b` and corner `c` of the mean triangle: the clip radius and stop crossing
-    // `[r, u, v]` at `values[b][3 c..3 c + 3]`.
-    let mut values: Vec<[f64; 9]> = vec![[0.0_f64; 9]; m];
-    // Each band's vertices as the triangles read them (every vertex is shared by up to six
-    // triangles): sensor position (mm, the lens's frame) and `[r, u, v]`.
-    let vertices = n * n;
-    let mut sensor = Vec::with_capacity(m * vertices);
-    let mut radius_uv = Vec::with_capacity(m * vertices);
-    for e in &emits {
-        for k in 0..vertices {
-            sensor.push(e.sensor(k));
-            let uv = e.stop_uv(k);
-            radius_uv.push([
-                f64::from(e.grid.max_rel[k]),
-                f64::from(uv[0]),
-                f64::from(uv[1]),
-            ]);
+    for tri in grid_triangles(n) {
+        match fringer.triangle(tri, mesh, &mut stats) {
+            Fringed::Drawn | Fringed::Clipped => {}
+            Fringed::Failed => {
+                failed += 1;
+                per_band(tri, mesh, &mut stats);
+            }
         }
     }
-    let corners = |b: usize, tri: [usize; 3]| tri.map(|k| sensor[b * vertices + k]);
-    for tri in grid_triangles(n) {
+    // Too many triangles off the model: the whole ghost band by band (where fringed and
+    // band-by-band triangles meet, their seams differ per band).
+    if failed as f64 > MAX_FAILED_SHARE * (2 * (n - 1) * (n - 1)) as f64 {
+        mesh.open.truncate_to(o0);
+        mesh.edge.truncate_to(e0);
+        mesh.fringe.truncate_to(f0);
+        mesh.fringe_tables.pop();
+        stats = GhostStats {
+            rays: stats.rays,
+            ..GhostStats::default()
+        };
+        for tri in grid_triangles(n) {
+            per_band(tri, mesh, &mut stats);
+        }
+    }
+    stats
+}
+
+/// The ghost's [`FringeTable`] and its bands' centres in `τ`, or `None` when its colour
+/// cannot be split into shares.
+///
+/// The dispersion coordinate τ (1/λ², in which the geometry is nearly linear) of the bands.
+/// Each bin's colour is spread evenly over a span of τ as wide as its own but centred on its
+/// band, so that its fringe sits where its band was traced (1/λ² is convex: a bin's centre
+/// wavelength is not its span's middle); τ is then scaled so the spans cover [0, 1].
+fn ghost_table(
+    bands: &[BandRef<'_>],
+    edges_nm: &[f64],
+    emits: &[BandTriangles<'_>],
+    n: usize,
+) -> Option<(FringeTable, Vec<f64>)> {
+    let inv = |l: f64| 1.0 / (l * l);
+    let raw: Vec<[f64; 2]> = bands
+        .iter()
+        .enumerate()
+        .map(|(b, band)| {
+            let half = 0.5 * (inv(edges_nm[b]) - inv(edges_nm[b + 1])).abs();
+            let c = inv(band.lambda_nm);
+            [c - half, c + half]
+        })
+        .collect();
+    let lo = raw.iter().fold(f64::INFINITY, |a, s| a.min(s[0]));
+    let hi = raw.iter().fold(f64::NEG_INFINITY, |a, s| a.max(s[1]));
+    let tau = |t: f64| (t - lo) / (hi - lo);
+    let spans: Vec<[f64; 2]> = raw.iter().map(|s| s.map(tau)).collect();
+    let colours: Vec<[f64; 3]> = emits
+        .iter()
+        .map(|e| {
+            let passed: f64 = (0..n * n)
+                .filter(|&k| e.grid.passes(k))
+                .map(|k| f64::from(e.grid.weight[k]))
+                .sum();
+            e.rgb.map(|c| f64::from(c) * passed)
+        })
+        .collect();
+    let centres: Vec<f64> = bands.iter().map(|b| tau(inv(b.lambda_nm))).collect();
+    FringeTable::new(&spans, &colours).map(|t| (t, centres))
+}
+
+/// What [`Fringer::triangle`] did with a grid triangle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Fringed {
+    /// Drawn once for every band (open or fringed).
+    Drawn,
+    /// Wholly clipped in every band: nothing to draw.
+    Clipped,
+    /// Off the model: to be drawn band by band.
+    Failed,
+}
+
+/// One fringed ghost's triangles: its bands' traced grids, read per vertex once, and the
+/// buffers a triangle's test reuses (made once per ghost).
+struct Fringer<'e, 'a> {
+    emits: &'e [BandTriangles<'a>],
+    model: LineFit<'e>,
+    /// Index of the ghost's table in [`GhostMesh::fringe_tables`].
+    id: f32,
+    feather: f32,
+    /// Largest distance of a band's value from its line on an edge (a quarter feather).
+    tolerance: f64,
+    /// The largest of the bands' smallest triangle areas (the Airy disc, mm²).
+    min_area: f64,
+    /// Grid vertices per band.
+    vertices: usize,
+    /// Each band's vertices as the triangles read them (every vertex is shared by up to six
+    /// triangles): sensor position (mm, the lens's frame) and `[r, u, v]`.
+    sensor: Vec<[f64; 2]>,
+    radius_uv: Vec<[f64; 3]>,
+    /// Per band: its triangle's area.
+    areas: Vec<f64>,
+    /// Per band `b` and corner `c` of the mean triangle: the clip radius and stop crossing
+    /// `[r, u, v]` at `values[b][3 c..3 c + 3]`.
+    values: Vec<[f64; 9]>,
+}
+
+impl<'e, 'a> Fringer<'e, 'a> {
+    fn new(emits: &'e [BandTriangles<'a>], centres: &'e [f64], n: usize, id: f32) -> Self {
+        let m = emits.len();
+        let feather = emits[0].feather;
+        let vertices = n * n;
+        let mut sensor = Vec::with_capacity(m * vertices);
+        let mut radius_uv = Vec::with_capacity(m * vertices);
+        for e in emits {
+            for k in 0..vertices {
+                sensor.push(e.sensor(k));
+                let uv = e.stop_uv(k);
+                radius_uv.push([
+                    f64::from(e.grid.max_rel[k]),
+                    f64::from(uv[0]),
+                    f64::from(uv[1]),
+                ]);
+            }
+        }
+        Fringer {
+            emits,
+            model: LineFit::new(centres),
+            id,
+            feather,
+            tolerance: 0.25 * f64::from(feather),
+            min_area: emits.iter().fold(0.0_f64, |a, e| a.max(e.min_area)),
+            vertices,
+            sensor,
+            radius_uv,
+            areas: vec![0.0_f64; m],
+            values: vec![[0.0_f64; 9]; m],
+        }
+    }
+
+    /// Band `b`'s triangle `tri` on the sensor (mm, the lens's frame).
+    #[inline]
+    fn corners(&self, b: usize, tri: [usize; 3]) -> [[f64; 2]; 3] {
+        tri.map(|k| self.sensor[b * self.vertices + k])
+    }
+
+    /// Draws grid triangle `tri` once for every band into `mesh` (counting it in `stats`)
+    /// where the bands follow the fringe model; [`Fringed::Failed`] where they do not.
+    fn triangle(
+        &mut self,
+        tri: [usize; 3],
+        mesh: &mut GhostMesh,
+        stats: &mut GhostStats,
+    ) -> Fringed {
+        let emits = self.emits;
+        let feather = self.feather;
         let all_done = emits
             .iter()
             .all(|e| tri.iter().all(|&k| e.grid.completed[k]));
         if !all_done {
-            failed += 1;
-            per_band(tri, mesh, &mut stats);
-            continue;
+            return Fringed::Failed;
         }
         if emits
             .iter()
             .all(|e| tri.iter().all(|&k| e.grid.max_rel[k] > 1.0 + feather))
         {
-            continue;
+            return Fringed::Clipped;
         }
-        // The mean triangle, and each band's triangle's orientation and area.
-        let mut mean = [[0.0_f64; 2]; 3];
-        let (mut smallest, mut largest) = (f64::INFINITY, 0.0_f64);
-        let mut sign = 0.0_f64;
-        let mut consistent = true;
-        for (b, area) in areas.iter_mut().enumerate() {
-            let p = corners(b, tri);
-            let a2 = cross(sub(p[1], p[0]), sub(p[2], p[0]));
-            *area = 0.5 * a2.abs();
-            if sign == 0.0 {
-                sign = a2.signum();
-            }
-            consistent &= a2 * sign > 0.0;
-            smallest = smallest.min(a2.abs());
-            largest = largest.max(a2.abs());
-            for (acc, q) in mean.iter_mut().zip(p) {
-                acc[0] += q[0] / m as f64;
-                acc[1] += q[1] / m as f64;
-            }
-        }
-        let mean_a2 = cross(sub(mean[1], mean[0]), sub(mean[2], mean[0]));
-        if !consistent
-            || mean_a2.is_nan()
-            || mean_a2 * sign <= 0.0
-            || largest > MAX_AREA_RATIO * smallest
-            || 0.5 * mean_a2.abs() < min_area
-        {
-            failed += 1;
-            per_band(tri, mesh, &mut stats);
-            continue;
-        }
-        // Each band's clip radius and stop crossing, extended affinely to the mean corners.
-        for (b, vals) in values.iter_mut().enumerate() {
-            let p = corners(b, tri);
-            let (e1, e2) = (sub(p[1], p[0]), sub(p[2], p[0]));
-            let inv = 1.0 / cross(e1, e2);
-            let at = tri.map(|k| radius_uv[b * vertices + k]);
-            for (c, q) in mean.iter().enumerate() {
-                let d = sub(*q, p[0]);
-                let (w1, w2) = (cross(d, e2) * inv, cross(e1, d) * inv);
-                for x in 0..3 {
-                    vals[3 * c + x] =
-                        at[0][x] + w1 * (at[1][x] - at[0][x]) + w2 * (at[2][x] - at[0][x]);
-                }
-            }
-        }
-        let (fits, residuals) = model.fit_all(&values);
+        let Some(mean) = self.mean_triangle(tri) else {
+            return Fringed::Failed;
+        };
+        self.extend_to(tri, &mean);
+        let (fits, residuals) = self.model.fit_all(&self.values);
         let mut lines = [[[0.0_f64; 2]; 3]; 3];
         let mut residual = [0.0_f64; 3];
         for (c, line) in lines.iter_mut().enumerate() {
@@ -657,28 +709,12 @@ pub fn mesh_ghost_fringed(
         // Where an edge crosses the triangle, the bands' values there must follow their lines
         // (the stop's only where its outline is drawn); inside, the mean triangle is all.
         let open = radius_open && stop_open;
-        let follows = residual[0] <= tolerance
-            && (stop_open || (residual[1] <= tolerance && residual[2] <= tolerance));
+        let follows = residual[0] <= self.tolerance
+            && (stop_open || (residual[1] <= self.tolerance && residual[2] <= self.tolerance));
         if !open && !follows {
-            failed += 1;
-            per_band(tri, mesh, &mut stats);
-            continue;
+            return Fringed::Failed;
         }
-        let mut flux = 0.0;
-        let mut colours = [[0.0_f32; 3]; 3];
-        // Each band's irradiance as in its own triangle: what band `b` adds at a point of the
-        // sensor is its flux over its own area there, wherever the mean triangle puts it (over
-        // the mean area, a band whose image is larger than the mean would gain light).
-        for (e, &area) in emits.iter().zip(&areas) {
-            flux += e.flux(tri);
-            let irr = e.irradiance_over(area) as f32;
-            for (colour, &k) in colours.iter_mut().zip(&tri) {
-                let w = irr * e.grid.weight[k];
-                for (v, c) in colour.iter_mut().zip(e.rgb) {
-                    *v += c * w;
-                }
-            }
-        }
+        let (flux, colours) = self.colours(tri);
         stats.flux += flux;
         stats.triangles += 1;
         let pixels = mean.map(|q| emits[0].to_pixel(q));
@@ -686,6 +722,7 @@ pub fn mesh_ghost_fringed(
             mesh.open.push(pixels, colours);
         } else {
             let flag = if stop_open { 0.0 } else { 1.0 };
+            let id = self.id;
             let corner = |c: usize| -> FringeAttrs {
                 let [r, u, v] = lines[c];
                 let [red, green, blue] = colours[c];
@@ -706,23 +743,85 @@ pub fn mesh_ghost_fringed(
             };
             mesh.fringe.push(pixels, [corner(0), corner(1), corner(2)]);
         }
+        Fringed::Drawn
     }
-    // Too many triangles off the model: the whole ghost band by band (where fringed and
-    // band-by-band triangles meet, their seams differ per band).
-    if failed as f64 > MAX_FAILED_SHARE * (2 * (n - 1) * (n - 1)) as f64 {
-        mesh.open.truncate_to(o0);
-        mesh.edge.truncate_to(e0);
-        mesh.fringe.truncate_to(f0);
-        mesh.fringe_tables.pop();
-        stats = GhostStats {
-            rays: stats.rays,
-            ..GhostStats::default()
-        };
-        for tri in grid_triangles(n) {
-            per_band(tri, mesh, &mut stats);
+
+    /// The mean of the bands' triangles `tri`, each band's area kept in `areas`; `None` when
+    /// the bands' triangles differ in orientation or by more than [`MAX_AREA_RATIO`] in area,
+    /// or the mean is smaller than the diffraction limit.
+    #[inline]
+    fn mean_triangle(&mut self, tri: [usize; 3]) -> Option<[[f64; 2]; 3]> {
+        let m = self.emits.len();
+        let mut mean = [[0.0_f64; 2]; 3];
+        let (mut smallest, mut largest) = (f64::INFINITY, 0.0_f64);
+        let mut sign = 0.0_f64;
+        let mut consistent = true;
+        for b in 0..m {
+            let p = self.corners(b, tri);
+            let a2 = cross(sub(p[1], p[0]), sub(p[2], p[0]));
+            self.areas[b] = 0.5 * a2.abs();
+            if sign == 0.0 {
+                sign = a2.signum();
+            }
+            consistent &= a2 * sign > 0.0;
+            smallest = smallest.min(a2.abs());
+            largest = largest.max(a2.abs());
+            for (acc, q) in mean.iter_mut().zip(p) {
+                acc[0] += q[0] / m as f64;
+                acc[1] += q[1] / m as f64;
+            }
+        }
+        let mean_a2 = cross(sub(mean[1], mean[0]), sub(mean[2], mean[0]));
+        let fails = !consistent
+            || mean_a2.is_nan()
+            || mean_a2 * sign <= 0.0
+            || largest > MAX_AREA_RATIO * smallest
+            || 0.5 * mean_a2.abs() < self.min_area;
+        (!fails).then_some(mean)
+    }
+
+    /// Each band's clip radius and stop crossing over its triangle `tri`, extended affinely
+    /// to the corners of `mean`, into `values`.
+    #[inline]
+    fn extend_to(&mut self, tri: [usize; 3], mean: &[[f64; 2]; 3]) {
+        for b in 0..self.emits.len() {
+            let p = self.corners(b, tri);
+            let (e1, e2) = (sub(p[1], p[0]), sub(p[2], p[0]));
+            let inv = 1.0 / cross(e1, e2);
+            let at = tri.map(|k| self.radius_uv[b * self.vertices + k]);
+            let vals = &mut self.values[b];
+            for (c, q) in mean.iter().enumerate() {
+                let d = sub(*q, p[0]);
+                let (w1, w2) = (cross(d, e2) * inv, cross(e1, d) * inv);
+                for x in 0..3 {
+                    vals[3 * c + x] =
+                        at[0][x] + w1 * (at[1][x] - at[0][x]) + w2 * (at[2][x] - at[0][x]);
+                }
+            }
         }
     }
-    stats
+
+    /// The flux of triangle `tri` summed over the bands, and its corners' summed RGB
+    /// irradiance. Each band's irradiance as in its own triangle: what band `b` adds at a
+    /// point of the sensor is its flux over its own area there, wherever the mean triangle
+    /// puts it (over the mean area, a band whose image is larger than the mean would gain
+    /// light).
+    #[inline]
+    fn colours(&self, tri: [usize; 3]) -> (f64, [[f32; 3]; 3]) {
+        let mut flux = 0.0;
+        let mut colours = [[0.0_f32; 3]; 3];
+        for (e, &area) in self.emits.iter().zip(&self.areas) {
+            flux += e.flux(tri);
+            let irr = e.irradiance_over(area) as f32;
+            for (colour, &k) in colours.iter_mut().zip(&tri) {
+                let w = irr * e.grid.weight[k];
+                for (v, c) in colour.iter_mut().zip(e.rgb) {
+                    *v += c * w;
+                }
+            }
+        }
+        (flux, colours)
+    }
 }
 
 /// Least-squares lines over fixed abscissae.

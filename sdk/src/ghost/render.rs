@@ -21,9 +21,7 @@ use crate::aperture::Aperture;
 use crate::image::HdrImage;
 use crate::raster::{Coverage, RowSplit, Shader, rasterize_into, rasterize_shaded_into};
 
-use super::bounds::GhostBounds;
-use super::context::{BandRef, GhostContext, GhostLight, GhostStats};
-use super::enumerate::GhostPath;
+use super::context::{BandRef, GhostContext, GhostGrid, GhostStats};
 use super::fringe::FringeShader;
 use super::grid::GridTrace;
 use super::mesh::{EdgeAttrs, GhostMesh, Mesh, OpenAttrs, SAMPLED_MIN_AREA};
@@ -37,47 +35,36 @@ pub struct GhostScratch {
     mesh: GhostMesh,
 }
 
-/// Renders `path` lit by `light` into `img` with an `n × n` grid over `bounds.entrance`, one
-/// trace per band: [`mesh_ghost`], then [`rasterize_ghost_mesh`].
-#[allow(clippy::too_many_arguments)]
+/// Renders `ghost` into `img`, one trace per band: [`mesh_ghost`], then
+/// [`rasterize_ghost_mesh`].
 pub fn render_ghost(
     ctx: &GhostContext<'_>,
-    path: GhostPath,
-    bounds: &GhostBounds,
-    n: usize,
-    light: &GhostLight,
+    ghost: &GhostGrid<'_>,
     bands: &[BandRef<'_>],
     scratch: &mut GhostScratch,
     img: &mut HdrImage,
 ) -> GhostStats {
     scratch.mesh.clear();
-    let stats = mesh_ghost(
-        ctx,
-        path,
-        bounds,
-        n,
-        light,
-        bands,
-        &mut scratch.grid,
-        &mut scratch.mesh,
-    );
+    let stats = mesh_ghost(ctx, ghost, bands, &mut scratch.grid, &mut scratch.mesh);
     rasterize_ghost_mesh(img, &scratch.mesh, ctx.aperture);
     stats
 }
 
-/// Traces `path` lit by `light` with an `n × n` grid over `bounds.entrance` at each band and
-/// appends its triangles, in pixels of `ctx.frame`, to `mesh`.
-#[allow(clippy::too_many_arguments)]
+/// Traces `ghost` (its `n × n` grid over `bounds.entrance`) at each band and appends its
+/// triangles, in pixels of `ctx.frame`, to `mesh`.
 pub fn mesh_ghost(
     ctx: &GhostContext<'_>,
-    path: GhostPath,
-    bounds: &GhostBounds,
-    n: usize,
-    light: &GhostLight,
+    ghost: &GhostGrid<'_>,
     bands: &[BandRef<'_>],
     grid: &mut GridTrace,
     mesh: &mut GhostMesh,
 ) -> GhostStats {
+    let GhostGrid {
+        path,
+        bounds,
+        n,
+        ref light,
+    } = *ghost;
     let mut stats = GhostStats::default();
     let aperture = ctx.aperture.sampler();
     for band in bands {

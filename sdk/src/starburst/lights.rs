@@ -50,6 +50,13 @@ pub struct StarburstSource<'a> {
     pub settings: StarburstSettings,
 }
 
+/// The image starbursts are added to and the part of the sensor it shows.
+#[derive(Debug)]
+pub struct StarburstTarget<'a> {
+    pub img: &'a mut HdrImage,
+    pub frame: &'a Frame,
+}
+
 /// What happened to one light's starburst.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct StarburstOutcome {
@@ -79,18 +86,17 @@ impl StarburstLens {
     }
 
     /// Adds the starburst of `light` through `system` (the lens this was prepared for) to
-    /// `img`, which shows `frame`.
-    #[allow(clippy::too_many_arguments)]
+    /// `target`'s image.
     pub fn add(
         &self,
         system: &LensSystem,
-        img: &mut HdrImage,
-        frame: &Frame,
+        target: &mut StarburstTarget<'_>,
         light: &StarburstLight,
         source: &StarburstSource<'_>,
         cache: &mut StarburstCache,
         scratch: &mut GridTrace,
     ) -> Result<StarburstOutcome, StarburstError> {
+        let frame = target.frame;
         let theta = light.theta_deg.to_radians();
         let phi = light.phi_deg.to_radians();
         let flux = light.intensity * direct_flux(system, &self.tables, theta, scratch);
@@ -116,7 +122,7 @@ impl StarburstLens {
             light.spectrum,
         )?;
         outcome.drawn = Some(add_starburst(
-            img,
+            target.img,
             frame,
             &pattern,
             centre,
