@@ -14,7 +14,7 @@ use flarebench_sdk::color::LightSpectrum;
 use flarebench_sdk::frame::Frame;
 use flarebench_sdk::paraxial::analyse;
 use flarebench_sdk::spectrum::LAMBDA_D_NM;
-use flarebench_tests::{build_dir, load_lens, plugin_library};
+use flarebench_test_support::{build_dir, library_file_name, load_lens, plugin_library};
 
 fn scene(width: usize, height: usize, film_width_mm: f64, theta: f64, phi: f64) -> Scene {
     Scene {
@@ -300,11 +300,7 @@ fn misfit(variant: Option<&str>, panic: &str) -> PathBuf {
     }
     let dir = build_dir().join("misfit-plugins").join(&stem);
     std::fs::create_dir_all(&dir).unwrap();
-    let out = dir.join(format!(
-        "{}{stem}{}",
-        std::env::consts::DLL_PREFIX,
-        std::env::consts::DLL_SUFFIX
-    ));
+    let out = dir.join(library_file_name(&stem));
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("plugins/misfit.rs");
     let rustc = std::env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
     let mut cmd = Command::new(rustc);
@@ -449,11 +445,7 @@ fn misfit_no_entry(dir: &Path) -> PathBuf {
         "#[unsafe(no_mangle)] pub extern \"C\" fn something_else() {}\n",
     )
     .unwrap();
-    let out = dir.join(format!(
-        "{}no_entry{}",
-        std::env::consts::DLL_PREFIX,
-        std::env::consts::DLL_SUFFIX
-    ));
+    let out = dir.join(library_file_name("no_entry"));
     let rustc = std::env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
     let o = Command::new(rustc)
         .args(["--edition", "2024", "--crate-type", "cdylib", "-o"])

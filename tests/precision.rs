@@ -4,7 +4,7 @@
 use flarebench_sdk::LensSystem;
 use flarebench_sdk::paraxial::analyse;
 use flarebench_sdk::trace::{Fate, Ray, RayBatch, Sequence};
-use flarebench_tests::{library_stems, load_lens};
+use flarebench_test_support::{library_stems, load_lens};
 
 /// Bound on |landing(f32) − landing(f64)| on the sensor, relative to the EFL. Measured worst
 /// case over the library: 1.34e-6 × EFL (Laikin wide angle), most lenses 1e-7 to

@@ -5,7 +5,7 @@
 
 use flarebench_sdk::paraxial::analyse;
 use flarebench_sdk::spectrum::LAMBDA_D_NM;
-use flarebench_tests::{library_stems, load_lens};
+use flarebench_test_support::{library_stems, load_lens};
 
 /// (lens, EFL in mm at the d line, tolerance in mm, where it comes from)
 const SOURCE_EFL: &[(&str, f64, f64, &str)] = &[

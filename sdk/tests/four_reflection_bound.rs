@@ -1,21 +1,18 @@
 //! The traced four-reflection energy bound (`ghost::FourReflectionBounds`) against the traced
 //! energy shares it bounds (`bounds::precise`), and how much it culls.
 
-use std::path::Path;
-
 use flarebench_sdk::LensSystem;
 use flarebench_sdk::ghost::bounds;
 use flarebench_sdk::ghost::four_bound::BOUND_GRID;
 use flarebench_sdk::ghost::{
     FourReflectionBounds, GridTrace, enumerate_four_reflection_ghosts, trace_grid,
 };
-use flarebench_sdk::io::read_lens;
 use flarebench_sdk::paraxial::stop_opening;
 use flarebench_sdk::trace::InterfaceTableSet;
+use flarebench_test_support::load_lens;
 
 fn lens(stem: &str) -> LensSystem {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../lenses/{stem}.xml"));
-    read_lens(&p).unwrap().system
+    load_lens(stem)
 }
 
 /// How far a traced energy share (`bounds::precise`) may exceed its bound: none. The bound is

@@ -18,22 +18,7 @@ use flarebench_sdk::io::read_lens;
 use flarebench_sdk::paraxial::{analyse, stop_opening};
 use flarebench_sdk::trace::InterfaceTableSet;
 use flarebench_sdk::{LensSystem, Medium, Surface};
-
-/// A stop of radius 2 mm, 5 mm of air, a 3 mm plate of n = 1.5, 10 mm of air, the sensor.
-fn plate() -> LensSystem {
-    let mut sys = LensSystem::new(
-        "plate",
-        vec![
-            Surface::stop(5.0, 2.0),
-            Surface::spherical(0.0, 3.0, Medium::Model { nd: 1.5, vd: None }, 10.0),
-            Surface::spherical(0.0, 10.0, Medium::Air, 10.0),
-            Surface::sensor(15.0),
-        ],
-    );
-    sys.film_width_mm = 20.0;
-    sys.film_height_mm = 20.0;
-    sys
-}
+use flarebench_test_support::{load_lens, plate};
 
 fn frame(sys: &LensSystem, px: usize) -> Frame {
     Frame {
@@ -224,17 +209,11 @@ fn ghost_images_converge_with_the_grid() {
     assert!(e2 < 0.05, "{e2}");
 }
 
-fn lens(stem: &str) -> LensSystem {
-    read_lens(&Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../lenses/{stem}.xml")))
-        .unwrap()
-        .system
-}
-
 /// On the axis every ghost of a rotationally symmetric lens is rotationally symmetric: the
 /// image equals its own transpose (x ↔ y) up to the grid's discretisation.
 #[test]
 fn on_axis_ghosts_are_rotationally_symmetric() {
-    let sys = lens("heliar-tronnier");
+    let sys = load_lens("heliar-tronnier");
     let mut sq = sys.clone();
     sq.film_height_mm = sq.film_width_mm;
     for path in [GhostPath::two(4, 3), GhostPath::two(8, 1)] {
@@ -336,7 +315,7 @@ fn stiff_cases_stay_finite() {
         .surfaces
         .insert(4, Surface::spherical(60.0, 8.0, Medium::Air, 10.0));
     stiff.validate().unwrap();
-    let sys_list = [stiff, lens("nikon-zoom-short")];
+    let sys_list = [stiff, load_lens("nikon-zoom-short")];
     for sys in &sys_list {
         for deg in [0.0f64, 30.0, 60.0, 89.0] {
             let theta = deg.to_radians();

@@ -1,19 +1,16 @@
 //! Ghost enumeration, batched ghost throughput and ghost bounds.
 
-use std::path::Path;
-
 use flarebench_sdk::LensSystem;
 use flarebench_sdk::ghost::bounds::{self, BoundsMode};
 use flarebench_sdk::ghost::{
     GhostPath, GridTrace, enumerate_ghosts, reflecting_surfaces, trace_grid,
 };
-use flarebench_sdk::io::read_lens;
 use flarebench_sdk::paraxial::stop_opening;
 use flarebench_sdk::trace::{InterfaceTableSet, Ray, RayBatch, Sequence};
+use flarebench_test_support::load_lens;
 
 fn lens(stem: &str) -> LensSystem {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../lenses/{stem}.xml"));
-    read_lens(&p).unwrap().system
+    load_lens(stem)
 }
 
 #[test]

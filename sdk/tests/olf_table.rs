@@ -11,17 +11,16 @@ use flarebench_sdk::ghost::bounds::{self, MAX_GRID, MIN_GRID};
 use flarebench_sdk::ghost::olf_table::{OlfTableError, olf_ghost_set};
 use flarebench_sdk::ghost::table::BoundsTable;
 use flarebench_sdk::ghost::{GhostPath, GridTrace, enumerate_ghosts};
-use flarebench_sdk::io::{OlfGhostBounds, read_lens, read_olf_bounds};
+use flarebench_sdk::io::{OlfGhostBounds, read_olf_bounds};
 use flarebench_sdk::trace::InterfaceTableSet;
+use flarebench_test_support::load_lens;
 
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
 fn lens(stem: &str) -> LensSystem {
-    read_lens(&root().join(format!("lenses/{stem}.xml")))
-        .unwrap()
-        .system
+    load_lens(stem)
 }
 
 fn heliar_file() -> OlfGhostBounds {

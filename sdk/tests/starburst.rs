@@ -3,18 +3,17 @@
 //! it is added to an image, and the chief ray's landing point.
 
 use std::f64::consts::PI;
-use std::path::Path;
 
 use flarebench_sdk::aperture::{Aperture, ApertureMask};
 use flarebench_sdk::color::{LightSpectrum, SpectralSampling};
 use flarebench_sdk::frame::Frame;
 use flarebench_sdk::image::HdrImage;
-use flarebench_sdk::io::read_lens;
 use flarebench_sdk::paraxial::analyse;
 use flarebench_sdk::starburst::{
     PowerSpectrum, StarburstCache, StarburstPattern, StarburstSettings, TAPER_START, add_starburst,
     chief_ray_landing, edge_window,
 };
+use flarebench_test_support::load_lens;
 
 fn settings(pupil_texels: usize, padding: usize) -> StarburstSettings {
     StarburstSettings {
@@ -408,9 +407,7 @@ fn the_cache_transforms_each_aperture_once() {
 }
 
 fn lens(stem: &str) -> flarebench_sdk::LensSystem {
-    read_lens(&Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../lenses/{stem}.xml")))
-        .unwrap()
-        .system
+    load_lens(stem)
 }
 
 #[test]

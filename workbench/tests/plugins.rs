@@ -6,23 +6,12 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use common::{flarebench, json, temp_dir};
+use flarebench_test_support::{library_file_name, plugin_library};
 
-/// A plugin library beside the binary; fails with the command to run when it is missing.
+/// A plugin library beside the binary (the test's build directory); fails with the command
+/// to run when it is missing.
 fn beside_binary(lib: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_BIN_EXE_flarebench"))
-        .parent()
-        .unwrap();
-    let p = dir.join(format!(
-        "{}{lib}{}",
-        std::env::consts::DLL_PREFIX,
-        std::env::consts::DLL_SUFFIX
-    ));
-    assert!(
-        p.is_file(),
-        "{} missing: run `cargo build --workspace` first",
-        p.display()
-    );
-    p
+    plugin_library(lib)
 }
 
 /// Runs `flarebench` with `args`, test plugins discovered.
@@ -96,11 +85,7 @@ fn plugins_list_shows_the_plugins_beside_the_binary_with_their_parameters() {
 fn a_broken_library_on_the_plugin_path_is_listed_with_the_reason() {
     let tmp = temp_dir("plugins-broken");
     let dir = tmp.path();
-    let bad = dir.join(format!(
-        "{}not_a_plugin{}",
-        std::env::consts::DLL_PREFIX,
-        std::env::consts::DLL_SUFFIX
-    ));
+    let bad = dir.join(library_file_name("not_a_plugin"));
     std::fs::write(&bad, "not a shared library").unwrap();
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_flarebench"))
         .args(["plugins", "list"])

@@ -9,15 +9,13 @@ use common::{flarebench, json, temp_dir};
 use flarebench::output::{ToneMap, read_exr, save_image};
 use flarebench_sdk::frame::Frame;
 use flarebench_sdk::image::HdrImage;
-use flarebench_sdk::io::read_lens;
 use flarebench_sdk::starburst::chief_ray_landing;
+use flarebench_test_support::load_lens;
 
 const LENS: &str = "double-gauss-50mm";
 
 fn lens() -> flarebench_sdk::LensSystem {
-    read_lens(&Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../lenses/{LENS}.xml")))
-        .unwrap()
-        .system
+    load_lens(LENS)
 }
 
 fn frame(w: usize, h: usize) -> Frame {

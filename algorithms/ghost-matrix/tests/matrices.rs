@@ -1,42 +1,22 @@
 //! The ghost matrices against independent references: a plate's ghost in closed form, and the
 //! sdk's real ray tracer in the paraxial limit along every ghost path of the Heliar.
 
+use flarebench_sdk::LensSystem;
 use flarebench_sdk::abi::author::{Scene, SceneLight};
 use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::color::{LightSpectrum, SpectralSampling};
 use flarebench_sdk::frame::Frame;
 use flarebench_sdk::ghost::{GhostPath, enumerate_ghosts};
 use flarebench_sdk::image::HdrImage;
-use flarebench_sdk::io::read_lens;
 use flarebench_sdk::paraxial::{analyse, stop_opening};
 use flarebench_sdk::raster::rasterize;
 use flarebench_sdk::trace::{Ray, Sequence};
-use flarebench_sdk::{LensSystem, Medium, Surface};
+use flarebench_test_support::{load_lens, plate};
 use ghost_matrix::matrix::{self, path_matrices};
 use ghost_matrix::{ghost_mesh, outline, polygon_area};
 
-/// A stop, a 3 mm plate of index 1.5 five millimetres behind it, the sensor 10 mm further.
-fn plate() -> LensSystem {
-    let mut sys = LensSystem::new(
-        "plate",
-        vec![
-            Surface::stop(5.0, 2.0),
-            Surface::spherical(0.0, 3.0, Medium::Model { nd: 1.5, vd: None }, 10.0),
-            Surface::spherical(0.0, 10.0, Medium::Air, 10.0),
-            Surface::sensor(15.0),
-        ],
-    );
-    sys.film_width_mm = 20.0;
-    sys.film_height_mm = 20.0;
-    sys
-}
-
 fn heliar() -> LensSystem {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../lenses/heliar-tronnier.xml"
-    );
-    read_lens(std::path::Path::new(path)).unwrap().system
+    load_lens("heliar-tronnier")
 }
 
 #[test]

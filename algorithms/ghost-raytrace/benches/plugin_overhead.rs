@@ -20,6 +20,7 @@ use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::frame::Frame;
 use flarebench_sdk::image::HdrImage;
 use flarebench_sdk::io::read_lens;
+use flarebench_test_support::{build_dir, library_file_name};
 use ghost_raytrace::ghosts;
 use ghost_raytrace::plan::{self, PlanOptions};
 use ghost_raytrace::scene::{LightSpec, Quality};
@@ -40,13 +41,8 @@ fn bench(c: &mut Criterion) {
     let light = LightSpec::parse("8,30").unwrap();
     let aperture = Aperture::Circular;
 
-    let exe = std::env::current_exe().unwrap();
-    let dir = exe.parent().and_then(Path::parent).unwrap();
-    let lib = dir.join(format!(
-        "{}ghost_raytrace{}",
-        std::env::consts::DLL_PREFIX,
-        std::env::consts::DLL_SUFFIX
-    ));
+    let dir = build_dir();
+    let lib = dir.join(library_file_name("ghost_raytrace"));
     let plugin = host::load(&lib).unwrap_or_else(|e| {
         panic!("{e}\n(run `cargo build --release -p flarebench-ghost-raytrace` first)")
     });
@@ -83,11 +79,7 @@ fn bench(c: &mut Criterion) {
     // (`tests/plugins/faulty`, `level=0`): scene conversion, the host's zeroed image, the
     // thunk's checks, one pass over the pixels, the NaN scan — an upper bound on what the
     // boundary adds to any render of that size.
-    let faulty = dir.join(format!(
-        "{}flarebench_test_plugin_faulty{}",
-        std::env::consts::DLL_PREFIX,
-        std::env::consts::DLL_SUFFIX
-    ));
+    let faulty = dir.join(library_file_name("flarebench_test_plugin_faulty"));
     match host::load(&faulty) {
         Ok(p) => {
             let mut inst = p.instantiate().unwrap();

@@ -10,15 +10,14 @@ use flarebench_sdk::ghost::table::{BoundsTable, TableOptions};
 use flarebench_sdk::ghost::{
     FourReflectionBounds, GridTrace, ReflectionOrder, enumerate_four_reflection_ghosts,
 };
-use flarebench_sdk::io::read_lens;
 use flarebench_sdk::trace::InterfaceTableSet;
+use flarebench_test_support::load_lens;
 use ghost_raytrace::ghosts;
 use ghost_raytrace::plan::{self, BOUNDS_LAMBDA_NM, DropReason, PlanOptions};
 use ghost_raytrace::scene::{LightSpec, Quality};
 
 fn lens(stem: &str) -> LensSystem {
-    let path = format!("{}/../../lenses/{stem}.xml", env!("CARGO_MANIFEST_DIR"));
-    read_lens(std::path::Path::new(&path)).unwrap().system
+    load_lens(stem)
 }
 
 fn frame(sys: &LensSystem, w: usize, h: usize) -> Frame {

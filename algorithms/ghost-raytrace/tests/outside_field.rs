@@ -3,16 +3,14 @@
 //! also where the light's own image is vignetted away inside the lens (the sun just out of
 //! frame), which once left every ghost with a zero energy share and an empty plan.
 
-use std::path::{Path, PathBuf};
-
 use flarebench_sdk::LensSystem;
 use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::frame::Frame;
 use flarebench_sdk::ghost::GridTrace;
 use flarebench_sdk::ghost::bounds;
-use flarebench_sdk::io::read_lens;
 use flarebench_sdk::paraxial::analyse;
 use flarebench_sdk::trace::InterfaceTableSet;
+use flarebench_test_support::{library_stems, load_lens};
 use ghost_raytrace::ghosts;
 use ghost_raytrace::plan::{self, BOUNDS_LAMBDA_NM, DropReason, PlanOptions};
 use ghost_raytrace::scene::{LightSpec, Quality};
@@ -25,23 +23,14 @@ const MAX_DEG: f64 = 85.0;
 /// is the room left for rounding in that sum.
 const SUM_SLACK: f64 = 1e-9;
 
-fn lenses_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../lenses")
-}
-
 fn bundled() -> Vec<(String, LensSystem)> {
-    let mut out: Vec<(String, LensSystem)> = std::fs::read_dir(lenses_dir())
-        .unwrap()
-        .flatten()
-        .map(|e| e.path())
-        .filter(|p| p.extension().is_some_and(|e| e == "xml"))
-        .map(|p| {
-            let stem = p.file_stem().unwrap().to_string_lossy().into_owned();
-            (stem, read_lens(&p).unwrap().system)
+    library_stems()
+        .into_iter()
+        .map(|stem| {
+            let sys = load_lens(&stem);
+            (stem, sys)
         })
-        .collect();
-    out.sort_by(|a, b| a.0.cmp(&b.0));
-    out
+        .collect()
 }
 
 /// The field angle of half the film diagonal (degrees), paraxially.
@@ -118,9 +107,7 @@ fn ghosts_that_reach_the_frame_are_drawn_from_the_axis_to_past_the_field() {
 /// image is vignetted away, renders a flare.
 #[test]
 fn the_nikon_zoom_flares_for_a_light_just_outside_its_field() {
-    let sys = read_lens(&lenses_dir().join("nikon-zoom-long.xml"))
-        .unwrap()
-        .system;
+    let sys = load_lens("nikon-zoom-long");
     let tables = InterfaceTableSet::for_system(&sys, BOUNDS_LAMBDA_NM);
     let direct = bounds::direct_flux(&sys, &tables, 9f64.to_radians(), &mut GridTrace::default());
     assert_eq!(direct, 0.0, "the light's own image is vignetted away at 9°");

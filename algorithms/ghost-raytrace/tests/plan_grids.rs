@@ -1,10 +1,8 @@
 //! The default preset draws smooth ghosts (bounds' grid up to `plan::SMOOTH_GRID`) with
 //! fewer triangles, and every other ghost with its bounds' grid.
 
-use std::path::Path;
-
 use flarebench_sdk::frame::Frame;
-use flarebench_sdk::io::read_lens;
+use flarebench_test_support::load_lens;
 use ghost_raytrace::plan::{self, PlanOptions, SMOOTH_GRID};
 use ghost_raytrace::scene::{LightSpec, Quality};
 
@@ -13,8 +11,7 @@ fn smooth_ghosts_take_three_quarters_of_their_grid() {
     assert_eq!(Quality::Default.smooth_grid_scale(), 0.75);
     let (mut smooth, mut other) = (0, 0);
     for lens in ["heliar-tronnier", "nikon-zoom-short"] {
-        let path = format!("{}/../../lenses/{lens}.xml", env!("CARGO_MANIFEST_DIR"));
-        let sys = read_lens(Path::new(&path)).unwrap().system;
+        let sys = load_lens(lens);
         let frame = Frame::across_film(480, 270, sys.film_width_mm);
         let lights = [LightSpec::parse("10,30").unwrap()];
         let preset = PlanOptions::for_quality(Quality::Default, None);

@@ -9,25 +9,14 @@ use flarebench_sdk::abi::params::parse_values;
 use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::frame::Frame;
 use flarebench_sdk::io::read_lens;
+use flarebench_test_support::plugin_library;
 use ghost_raytrace::plan::{self, PlanOptions};
 use ghost_raytrace::scene::{LightSpec, Quality};
 use ghost_raytrace::{ghosts, plugin};
 
 /// The cdylib beside this test's `deps/` directory.
 fn library() -> PathBuf {
-    let exe = std::env::current_exe().unwrap();
-    let dir = exe.parent().and_then(Path::parent).unwrap();
-    let path = dir.join(format!(
-        "{}ghost_raytrace{}",
-        std::env::consts::DLL_PREFIX,
-        std::env::consts::DLL_SUFFIX
-    ));
-    assert!(
-        path.is_file(),
-        "{} is missing: run `cargo build --workspace` first",
-        path.display()
-    );
-    path
+    plugin_library("ghost_raytrace")
 }
 
 /// Ghosts are summed over the cores in an order that varies between runs; measured

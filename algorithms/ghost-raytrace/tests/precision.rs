@@ -2,14 +2,13 @@
 
 use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::frame::Frame;
-use flarebench_sdk::io::read_lens;
+use flarebench_test_support::load_lens;
 use ghost_raytrace::ghosts::{RenderOptions, render_with};
 use ghost_raytrace::plan::{PlanOptions, plan};
 use ghost_raytrace::scene::{LightSpec, Quality};
 
 fn compare(lens: &str, light: &str) -> (f64, f64) {
-    let path = format!("{}/../../lenses/{lens}.xml", env!("CARGO_MANIFEST_DIR"));
-    let sys = read_lens(std::path::Path::new(&path)).unwrap().system;
+    let sys = load_lens(lens);
     let frame = Frame {
         width: 320,
         height: 180,

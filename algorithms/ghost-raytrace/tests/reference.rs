@@ -9,7 +9,7 @@ use flarebench_sdk::LensSystem;
 use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::frame::Frame;
 use flarebench_sdk::ghost::ReflectionOrder;
-use flarebench_sdk::io::read_lens;
+use flarebench_test_support::load_lens;
 use ghost_raytrace::ghosts;
 use ghost_raytrace::plan::LightPlan;
 use ghost_raytrace::reference::{
@@ -19,8 +19,7 @@ use ghost_raytrace::scene::LightSpec;
 
 /// A bundled lens and a frame of `width × height` pixels across its film.
 fn lens_and_frame(stem: &str, width: usize, height: usize) -> (LensSystem, Frame) {
-    let path = format!("{}/../../lenses/{stem}.xml", env!("CARGO_MANIFEST_DIR"));
-    let sys = read_lens(std::path::Path::new(&path)).unwrap().system;
+    let sys = load_lens(stem);
     let frame = Frame::across_film(width, height, sys.film_width_mm);
     (sys, frame)
 }

@@ -3,7 +3,7 @@
 //! cache keeps one transform per aperture between renders and lenses, and bad settings are
 //! refused with their reason.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use flarebench_sdk::LensSystem;
 use flarebench_sdk::abi::author::{FlarePlugin, Output, Params, Scene, SceneLight};
@@ -15,35 +15,23 @@ use flarebench_sdk::frame::Frame;
 use flarebench_sdk::ghost::GridTrace;
 use flarebench_sdk::ghost::bounds::direct_flux;
 use flarebench_sdk::image::HdrImage;
-use flarebench_sdk::io::read_lens;
 use flarebench_sdk::paraxial::analyse;
 use flarebench_sdk::spectrum::LAMBDA_D_NM;
 use flarebench_sdk::starburst::{
     PowerSpectrum, StarburstPattern, StarburstSettings, add_starburst, chief_ray_landing,
 };
 use flarebench_sdk::trace::InterfaceTableSet;
+use flarebench_test_support::load_lens;
+use flarebench_test_support::plugin_library;
 use starburst_fraunhofer::{FLUX_LAMBDA_NM, StarburstFraunhofer};
 
 /// The cdylib beside this test's `deps/` directory.
 fn library() -> PathBuf {
-    let exe = std::env::current_exe().unwrap();
-    let dir = exe.parent().and_then(Path::parent).unwrap();
-    let path = dir.join(format!(
-        "{}starburst_fraunhofer{}",
-        std::env::consts::DLL_PREFIX,
-        std::env::consts::DLL_SUFFIX
-    ));
-    assert!(
-        path.is_file(),
-        "{} is missing: run `cargo build --workspace` first",
-        path.display()
-    );
-    path
+    plugin_library("starburst_fraunhofer")
 }
 
 fn lens(name: &str) -> LensSystem {
-    let path = format!("{}/../../lenses/{name}.xml", env!("CARGO_MANIFEST_DIR"));
-    read_lens(Path::new(&path)).unwrap().system
+    load_lens(name)
 }
 
 fn frame(sys: &LensSystem, width: usize, height: usize) -> Frame {

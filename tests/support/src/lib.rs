@@ -1,0 +1,84 @@
+//! Helpers shared by the workspace's tests and benches (a dev-dependency of every crate that
+//! tests against the bundled lenses or the built plugin libraries): the lens library, the
+//! plugin libraries `cargo build --workspace` puts in the target directory, and the fixtures
+//! several crates' tests share.
+
+use std::path::{Path, PathBuf};
+
+use flarebench_sdk::io::read_lens;
+use flarebench_sdk::{LensSystem, Medium, Surface};
+
+/// The repository's `lenses/` directory.
+pub fn lenses_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../lenses")
+}
+
+/// Loads `lenses/<stem>.xml`, panicking with the loader's message on failure.
+pub fn load_lens(stem: &str) -> LensSystem {
+    let path = lenses_dir().join(format!("{stem}.xml"));
+    read_lens(&path).unwrap_or_else(|e| panic!("{e}")).system
+}
+
+/// The stems of every bundled lens, sorted.
+pub fn library_stems() -> Vec<String> {
+    let mut stems: Vec<String> = std::fs::read_dir(lenses_dir())
+        .expect("lenses/ exists")
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|e| e == "xml"))
+        .filter_map(|p| p.file_stem()?.to_str().map(str::to_string))
+        .collect();
+    stems.sort();
+    stems
+}
+
+/// The target directory the running test or bench was built into (`target/debug`,
+/// `target/release`), where `cargo build --workspace` puts the plugin libraries (`cdylib`s)
+/// and the `flarebench` binary.
+pub fn build_dir() -> PathBuf {
+    let exe = std::env::current_exe().expect("the test binary has a path");
+    // target/debug/deps/<test>-<hash> → target/debug
+    exe.parent()
+        .and_then(Path::parent)
+        .expect("test binaries live in <target>/<profile>/deps")
+        .to_path_buf()
+}
+
+/// The file name of a shared library of lib name `name` on this platform (`libNAME.so`).
+pub fn library_file_name(name: &str) -> String {
+    format!(
+        "{}{name}{}",
+        std::env::consts::DLL_PREFIX,
+        std::env::consts::DLL_SUFFIX
+    )
+}
+
+/// The built plugin library of crate lib `name` in [`build_dir`], panicking with the command
+/// to run when it has not been built.
+pub fn plugin_library(name: &str) -> PathBuf {
+    let path = build_dir().join(library_file_name(name));
+    assert!(
+        path.is_file(),
+        "{} is missing: run `cargo build --workspace` before `cargo test --workspace`",
+        path.display()
+    );
+    path
+}
+
+/// A stop of radius 2 mm, 5 mm of air, a 3 mm plane-parallel plate of n = 1.5 (no
+/// dispersion, semi-diameter 10 mm), 10 mm of air, the sensor, on a 20 × 20 mm film: its
+/// ghosts and their energies have closed forms.
+pub fn plate() -> LensSystem {
+    let mut sys = LensSystem::new(
+        "plate",
+        vec![
+            Surface::stop(5.0, 2.0),
+            Surface::spherical(0.0, 3.0, Medium::Model { nd: 1.5, vd: None }, 10.0),
+            Surface::spherical(0.0, 10.0, Medium::Air, 10.0),
+            Surface::sensor(15.0),
+        ],
+    );
+    sys.film_width_mm = 20.0;
+    sys.film_height_mm = 20.0;
+    sys
+}
