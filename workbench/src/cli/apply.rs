@@ -19,10 +19,6 @@
 
 use std::path::PathBuf;
 
-/// How many stops brighter than its pixels a clipped source of an 8-bit image is taken to be
-/// (module docs).
-pub const CLIPPED_SOURCE_STOPS: f64 = 10.0;
-
 use clap::Args;
 use flarebench_sdk::color::LightSpectrum;
 use flarebench_sdk::frame::Frame;
@@ -42,6 +38,10 @@ use crate::input_image::read_input_image;
 use crate::lens_library;
 use crate::output::{ExrPrecision, OutputFormat, ToneMap, ToneOperator, save_image_as};
 use crate::sources::{Source, direction_of, find_sources};
+
+/// How many stops brighter than its pixels a clipped source of an 8-bit image is taken to be
+/// (module docs).
+pub const CLIPPED_SOURCE_STOPS: f64 = 10.0;
 
 #[derive(Debug, Args)]
 pub struct ApplyArgs {
