@@ -7,6 +7,12 @@
 //! where the ghosts' frame puts the light. Its height on the front vertex plane starts at the
 //! paraxial entrance pupil, `h = −z_EP tan θ`, and is refined by the secant method until the
 //! ray crosses the stop within 1e-9 mm of the axis (real pupils are aberrated).
+//!
+//! Far off axis a wide-angle lens's real entrance pupil has moved well away from the paraxial
+//! one (a fisheye's at 60° lies millimetres off the paraxial guess), and the secant method's
+//! start may be vignetted before it reaches the stop. Then heights across the whole entrance
+//! ([`crate::ghost::bounds::entrance_search_rect`]) are sampled, a pair whose stop crossings
+//! lie on either side of the axis is taken, and bisection closes on the chief ray.
 
 use crate::paraxial::{ParaxialError, analyse};
 use crate::system::LensSystem;
@@ -52,13 +58,92 @@ pub fn chief_ray_landing(
             }),
         }
     };
-    let mut h0 = -para.entrance_pupil_z_mm * theta.tan();
+    let turn = |[x, y]: [f64; 2]| {
+        let (s, c) = phi.sin_cos();
+        [x * c - y * s, x * s + y * c]
+    };
+    let h0 = -para.entrance_pupil_z_mm * theta.tan();
+    let step = 1e-3 * para.entrance_pupil_diameter_mm.max(1e-3);
+    let secant = secant_from(&mut shoot, h0, step, theta_deg);
+    if let Ok(land) = secant {
+        return Ok(turn(land));
+    }
+    // The paraxial start is lost or the secant method wandered: bracket the chief ray among
+    // heights across the entrance and bisect.
+    let half = crate::ghost::bounds::entrance_search_rect(system, theta).y1;
+    let heights: Vec<f64> = (0..=BRACKET_SAMPLES)
+        .map(|k| -half + 2.0 * half * k as f64 / BRACKET_SAMPLES as f64)
+        .collect();
+    let crossings: Vec<Option<f64>> = heights
+        .iter()
+        .map(|&h| {
+            hits.clear();
+            seq.trace_with_hits(&Ray::collimated(theta, 0.0, h), &mut hits);
+            hits.iter()
+                .find(|hit| hit.surface == stop)
+                .map(|hit| hit.position.y)
+        })
+        .collect();
+    let bracket = (0..BRACKET_SAMPLES).find_map(|k| match (crossings[k], crossings[k + 1]) {
+        (Some(a), Some(b)) if a.signum() != b.signum() || a == 0.0 => {
+            Some((heights[k], a, heights[k + 1]))
+        }
+        _ => None,
+    });
+    let Some((mut lo, mut y_lo, mut hi)) = bracket else {
+        return secant.map(turn);
+    };
+    for _ in 0..BISECTIONS {
+        let mid = 0.5 * (lo + hi);
+        hits.clear();
+        seq.trace_with_hits(&Ray::collimated(theta, 0.0, mid), &mut hits);
+        let Some(y) = hits
+            .iter()
+            .find(|hit| hit.surface == stop)
+            .map(|h| h.position.y)
+        else {
+            break;
+        };
+        if y.abs() <= STOP_TOLERANCE_MM {
+            lo = mid;
+            break;
+        }
+        if y.signum() == y_lo.signum() {
+            (lo, y_lo) = (mid, y);
+        } else {
+            hi = mid;
+        }
+    }
+    let r = seq.trace(&Ray::collimated(theta, 0.0, lo));
+    if r.completed {
+        Ok(turn([r.ray.origin.x, r.ray.origin.y]))
+    } else {
+        Err(ChiefRayError::Lost {
+            theta_deg,
+            fate: r.fate,
+        })
+    }
+}
+
+/// Heights sampled across the entrance when the secant method cannot start.
+const BRACKET_SAMPLES: usize = 256;
+/// Bisection steps: each halves the bracket (from at most the entrance's width, 2⁻⁶⁰ of it is
+/// far below [`STOP_TOLERANCE_MM`]).
+const BISECTIONS: usize = 60;
+
+/// The secant method on the stop-crossing height from entrance height `h0` (next `h0 + step`):
+/// the landing point once the crossing is within [`STOP_TOLERANCE_MM`] of the axis.
+fn secant_from(
+    shoot: &mut impl FnMut(f64) -> Result<(f64, [f64; 2]), ChiefRayError>,
+    mut h0: f64,
+    step: f64,
+    theta_deg: f64,
+) -> Result<[f64; 2], ChiefRayError> {
     let (mut y0, mut land) = shoot(h0)?;
-    let mut h1 = h0 + 1e-3 * para.entrance_pupil_diameter_mm.max(1e-3);
+    let mut h1 = h0 + step;
     for _ in 0..50 {
         if y0.abs() <= STOP_TOLERANCE_MM {
-            let (s, c) = phi.sin_cos();
-            return Ok([land[0] * c - land[1] * s, land[0] * s + land[1] * c]);
+            return Ok(land);
         }
         let (y1, land1) = shoot(h1)?;
         let slope = (y1 - y0) / (h1 - h0);
