@@ -278,22 +278,19 @@ fn read_lens_blocks(
 ) -> Result<Vec<Read>, LensFileError> {
     let mut unknown: BTreeMap<&str, usize> = BTreeMap::new();
     let mut reads: Vec<Read> = Vec::new();
-    let mut glasses = glass::Seen::default();
+    let mut glasses = GlassLookup {
+        gcat: &head.gcat,
+        lambda: head.lambda,
+        seen: glass::Seen::default(),
+        substitutions,
+    };
     for block in lens_blocks {
         for r in &block.records {
             if !KNOWN_KEYS.contains(&r.key) && !QUIET_KEYS.contains(&r.key) {
                 unknown.entry(r.key).or_insert(r.pos);
             }
         }
-        let item = read_block(
-            ctx,
-            block,
-            head.units,
-            &head.settings,
-            (&head.gcat, &mut glasses),
-            head.lambda,
-            substitutions,
-        )?;
+        let item = read_block(ctx, block, head.units, &head.settings, &mut glasses)?;
         match item {
             Item::Surface(read) => reads.push(*read),
             Item::Gap(t) => match reads.last_mut() {
@@ -669,38 +666,106 @@ fn mirror_error(ctx: &Reporter<'_>, block: &Block<'_>, r: &Record<'_>) -> LensFi
     )
 }
 
+/// Glass lookup for the lens blocks: the catalogues (`GCAT`), the wavelength (nm), the glasses
+/// seen so far and the substitutions made.
+struct GlassLookup<'a> {
+    gcat: &'a [String],
+    lambda: f64,
+    seen: glass::Seen,
+    substitutions: &'a mut Vec<String>,
+}
+
+/// A lens block's surface type, as read.
+#[derive(Clone, Copy, PartialEq)]
+enum Kind {
+    Standard,
+    EvenAsphere,
+    ExtendedAsphere,
+    CoordinateBreak,
+}
+
+/// A surface's spacing and shape in lens units, the configuration's values applied.
+struct Shape {
+    thickness: f64,
+    curvature: f64,
+    conic: f64,
+    /// The clear semi-diameter, if given.
+    semi: Option<f64>,
+}
+
 /// One surface block between the object and the image.
 fn read_block(
     ctx: &mut Reporter<'_>,
     block: &Block<'_>,
     units: Units,
     settings: &[Setting],
-    (gcat, glasses): (&[String], &mut glass::Seen),
-    lambda: f64,
-    substitutions: &mut Vec<String>,
+    glasses: &mut GlassLookup<'_>,
 ) -> Result<Item, LensFileError> {
-    let n = block.number;
     let mut spans = SurfaceSpans {
         pos: block.pos,
         fields: Vec::new(),
     };
+    let kind = surface_kind(ctx, block, &mut spans)?;
+    check_centred(ctx, block)?;
+    let shape = read_shape(ctx, block, settings, &mut spans)?;
+    if kind == Kind::CoordinateBreak {
+        check_coordinate_break(ctx, block)?;
+        return Ok(Item::Gap(shape.thickness * units.mm));
+    }
+    // Even-asphere coefficients of r², r⁴, … in lens units.
+    let asph = match kind {
+        Kind::EvenAsphere => even_asphere(ctx, block, &mut spans)?,
+        Kind::ExtendedAsphere => extended_asphere(ctx, block, &mut spans)?,
+        _ => [0.0; 8],
+    };
+    let medium = read_medium(ctx, block, glasses, &mut spans)?;
+    for key in ["SQAP", "ELAP", "OBSC"] {
+        if let Some(r) = block.get(key) {
+            ctx.warn(
+                r.pos,
+                format!(
+                    "SURF {}: the {key} aperture is not read; the surface is clipped by its \
+                     circular semi-diameter",
+                    block.number
+                ),
+            );
+        }
+    }
+    let coating = block
+        .get("COAT")
+        .and_then(|r| r.arg(0))
+        .filter(|c| !c.is_empty() && !c.eq_ignore_ascii_case("NONE"))
+        .map(str::to_string);
+    if let Some(r) = block.get("COAT") {
+        spans.add("coating", "COAT", r.arg_pos(0));
+    }
+    let mm = units.mm;
+    Ok(Item::Surface(Box::new(Read {
+        surface: refracting_surface(&shape, &asph, medium, mm),
+        given_semi: shape.semi.map(|s| s * mm),
+        zemax: block.number,
+        spans,
+        stop: block.get("STOP").map(|r| r.pos),
+        coating,
+    })))
+}
+
+/// The block's `TYPE` (default `STANDARD`); an unsupported type is an error naming it.
+fn surface_kind(
+    ctx: &Reporter<'_>,
+    block: &Block<'_>,
+    spans: &mut SurfaceSpans,
+) -> Result<Kind, LensFileError> {
     let type_rec = block.get("TYPE");
     let type_name = type_rec.and_then(|r| r.arg(0)).unwrap_or("STANDARD");
     if let Some(r) = type_rec {
         spans.add("type", "TYPE", r.arg_pos(0));
     }
-    #[derive(PartialEq)]
-    enum Kind {
-        Standard,
-        EvenAsphere,
-        ExtendedAsphere,
-        CoordinateBreak,
-    }
-    let kind = match type_name.to_ascii_uppercase().as_str() {
-        "STANDARD" => Kind::Standard,
-        "EVENASPH" => Kind::EvenAsphere,
-        "XASPHERE" => Kind::ExtendedAsphere,
-        "COORDBRK" => Kind::CoordinateBreak,
+    match type_name.to_ascii_uppercase().as_str() {
+        "STANDARD" => Ok(Kind::Standard),
+        "EVENASPH" => Ok(Kind::EvenAsphere),
+        "XASPHERE" => Ok(Kind::ExtendedAsphere),
+        "COORDBRK" => Ok(Kind::CoordinateBreak),
         other => {
             let what = match other {
                 "QED_TYPE" => " (Q-type asphere)",
@@ -710,16 +775,22 @@ fn read_block(
                 "DGRATING" => " (diffraction grating)",
                 _ => "",
             };
-            return Err(ctx.error(
+            Err(ctx.error(
                 type_rec.map_or(block.pos, |r| r.arg_pos(0)),
                 "TYPE",
                 format!(
-                    "SURF {n} has type {type_name}{what}, which flarebench does not read; \
-                     supported: {SUPPORTED}"
+                    "SURF {} has type {type_name}{what}, which flarebench does not read; \
+                     supported: {SUPPORTED}",
+                    block.number
                 ),
-            ));
+            ))
         }
-    };
+    }
+}
+
+/// Refuses a surface marked "ignore" (`IGNR`) and a tilted or decentered one (`SCBD`).
+fn check_centred(ctx: &Reporter<'_>, block: &Block<'_>) -> Result<(), LensFileError> {
+    let n = block.number;
     if let Some(r) = block.get("IGNR")
         && r.arg(0).is_some_and(|a| a != "0")
     {
@@ -740,10 +811,19 @@ fn read_block(
             format!("SURF {n} is tilted or decentered: flarebench models centred systems only"),
         ));
     }
-    let parm = |i: usize| block.all("PARM").find(|r| r.arg(0) == Some(&i.to_string()));
+    Ok(())
+}
 
-    let disz_rec = block.get("DISZ");
-    let mut thickness = match disz_rec {
+/// `DISZ`, `CURV`, `CONI` and the semi-diameter, then the configuration's values for this
+/// surface; the spans listed with the configuration's first.
+fn read_shape(
+    ctx: &mut Reporter<'_>,
+    block: &Block<'_>,
+    settings: &[Setting],
+    spans: &mut SurfaceSpans,
+) -> Result<Shape, LensFileError> {
+    let n = block.number;
+    let mut thickness = match block.get("DISZ") {
         Some(r) if r.arg(0).is_some_and(|a| a.eq_ignore_ascii_case("INFINITY")) => {
             return Err(ctx.error(
                 r.arg_pos(0),
@@ -757,7 +837,6 @@ fn read_block(
         }
         None => 0.0,
     };
-    let mine = settings.iter().filter(|s| s.surface == n);
     let mut curvature = match block.get("CURV") {
         Some(r) => {
             spans.add("radius", "CURV", r.arg_pos(0));
@@ -772,8 +851,8 @@ fn read_block(
         }
         None => 0.0,
     };
-    let mut semi = semi_diameter(ctx, block, &mut spans)?;
-    for s in mine {
+    let mut semi = semi_diameter(ctx, block, spans)?;
+    for s in settings.iter().filter(|s| s.surface == n) {
         match s.target {
             Target::Thickness => {
                 thickness = s.value;
@@ -796,163 +875,176 @@ fn read_block(
     }
     // Later entries win: put the configuration's positions first.
     spans.fields.reverse();
+    Ok(Shape {
+        thickness,
+        curvature,
+        conic,
+        semi,
+    })
+}
 
-    if kind == Kind::CoordinateBreak {
-        if let Some(r) = block.get("STOP") {
-            return Err(ctx.error(
-                r.pos,
-                "STOP",
-                format!("the stop is on SURF {n}, a coordinate break"),
-            ));
-        }
-        for i in 1..=5 {
-            if let Some(r) = parm(i) {
-                let v = r.number(ctx, 1)?;
-                if v != 0.0 {
-                    return Err(ctx.error(
-                        r.arg_pos(1),
-                        "PARM",
-                        format!(
-                            "SURF {n} is a coordinate break with a {} of {v}: flarebench \
-                             models centred systems only",
-                            if i <= 2 { "decenter" } else { "tilt" }
-                        ),
-                    ));
-                }
-            }
-        }
-        if let Some(r) = block.get("GLAS")
-            && r.arg(0) == Some("MIRROR")
-        {
-            return Err(mirror_error(ctx, block, r));
-        }
-        return Ok(Item::Gap(thickness * units.mm));
+/// Refuses a coordinate break that is the stop, decenters or tilts (`PARM 1` to `5`), or is
+/// a mirror.
+fn check_coordinate_break(ctx: &Reporter<'_>, block: &Block<'_>) -> Result<(), LensFileError> {
+    let n = block.number;
+    if let Some(r) = block.get("STOP") {
+        return Err(ctx.error(
+            r.pos,
+            "STOP",
+            format!("the stop is on SURF {n}, a coordinate break"),
+        ));
     }
-
-    // Even-asphere coefficients of r², r⁴, … in lens units.
-    let mut asph = [0.0; 8];
-    match kind {
-        Kind::EvenAsphere => {
-            for r in block.all("PARM") {
-                let i = r.integer(ctx, 0)?;
-                let v = r.number(ctx, 1)?;
-                match i {
-                    1..=8 => asph[i - 1] = v,
-                    _ if v == 0.0 => {}
-                    _ => {
-                        return Err(ctx.error(
-                            r.arg_pos(0),
-                            "PARM",
-                            format!("EVENASPH has parameters 1 to 8, got PARM {i} = {v}"),
-                        ));
-                    }
-                }
-                spans.add("aspheric", "PARM", r.arg_pos(1));
-            }
-        }
-        Kind::ExtendedAsphere => {
-            let xdat = |i: usize| block.all("XDAT").find(|r| r.arg(0) == Some(&i.to_string()));
-            let terms = match xdat(1) {
-                Some(r) => r.integer(ctx, 1)?,
-                None => 0,
-            };
-            let r0 = match xdat(2) {
-                Some(r) => r.number(ctx, 1)?,
-                None => 1.0,
-            };
-            if terms > 0 && r0 <= 0.0 {
+    let parm = |i: usize| block.all("PARM").find(|r| r.arg(0) == Some(&i.to_string()));
+    for i in 1..=5 {
+        if let Some(r) = parm(i) {
+            let v = r.number(ctx, 1)?;
+            if v != 0.0 {
                 return Err(ctx.error(
-                    xdat(2).map_or(block.pos, |r| r.arg_pos(1)),
-                    "XDAT",
-                    format!("XASPHERE needs a positive normalization radius, got {r0}"),
+                    r.arg_pos(1),
+                    "PARM",
+                    format!(
+                        "SURF {n} is a coordinate break with a {} of {v}: flarebench models \
+                         centred systems only",
+                        if i <= 2 { "decenter" } else { "tilt" }
+                    ),
                 ));
             }
-            for r in block.all("XDAT") {
-                let i = r.integer(ctx, 0)?;
-                if i < 3 || i - 2 > terms {
-                    continue;
-                }
-                let k = i - 2;
-                let v = r.number(ctx, 1)?;
-                if k > 8 {
-                    if v != 0.0 {
-                        return Err(ctx.error(
-                            r.arg_pos(1),
-                            "XDAT",
-                            format!(
-                                "XASPHERE term {k} (r^{}) is not zero; flarebench reads up to \
-                                 r^16",
-                                2 * k
-                            ),
-                        ));
-                    }
-                    continue;
-                }
-                // α_k (r/r0)^(2k) = (α_k / r0^(2k)) r^(2k).
-                asph[k - 1] = v / r0.powi(2 * k as i32);
-                spans.add("aspheric", "XDAT", r.arg_pos(1));
+        }
+    }
+    if let Some(r) = block.get("GLAS")
+        && r.arg(0) == Some("MIRROR")
+    {
+        return Err(mirror_error(ctx, block, r));
+    }
+    Ok(())
+}
+
+/// `EVENASPH` coefficients of r², …, r¹⁶ (`PARM 1` to `8`) in lens units.
+fn even_asphere(
+    ctx: &Reporter<'_>,
+    block: &Block<'_>,
+    spans: &mut SurfaceSpans,
+) -> Result<[f64; 8], LensFileError> {
+    let mut asph = [0.0; 8];
+    for r in block.all("PARM") {
+        let i = r.integer(ctx, 0)?;
+        let v = r.number(ctx, 1)?;
+        match i {
+            1..=8 => asph[i - 1] = v,
+            _ if v == 0.0 => {}
+            _ => {
+                return Err(ctx.error(
+                    r.arg_pos(0),
+                    "PARM",
+                    format!("EVENASPH has parameters 1 to 8, got PARM {i} = {v}"),
+                ));
             }
         }
-        _ => {}
+        spans.add("aspheric", "PARM", r.arg_pos(1));
     }
+    Ok(asph)
+}
 
-    let medium = match block.get("GLAS") {
-        None => Medium::Air,
-        Some(r) if r.arg(0) == Some("MIRROR") => return Err(mirror_error(ctx, block, r)),
+/// `XASPHERE` terms (`XDAT 1` their count, `XDAT 2` the normalization radius r0) as even-asphere
+/// coefficients of r², …, r¹⁶ in lens units; a higher term must be zero.
+fn extended_asphere(
+    ctx: &Reporter<'_>,
+    block: &Block<'_>,
+    spans: &mut SurfaceSpans,
+) -> Result<[f64; 8], LensFileError> {
+    let mut asph = [0.0; 8];
+    let xdat = |i: usize| block.all("XDAT").find(|r| r.arg(0) == Some(&i.to_string()));
+    let terms = match xdat(1) {
+        Some(r) => r.integer(ctx, 1)?,
+        None => 0,
+    };
+    let r0 = match xdat(2) {
+        Some(r) => r.number(ctx, 1)?,
+        None => 1.0,
+    };
+    if terms > 0 && r0 <= 0.0 {
+        return Err(ctx.error(
+            xdat(2).map_or(block.pos, |r| r.arg_pos(1)),
+            "XDAT",
+            format!("XASPHERE needs a positive normalization radius, got {r0}"),
+        ));
+    }
+    for r in block.all("XDAT") {
+        let i = r.integer(ctx, 0)?;
+        if i < 3 || i - 2 > terms {
+            continue;
+        }
+        let k = i - 2;
+        let v = r.number(ctx, 1)?;
+        if k > 8 {
+            if v != 0.0 {
+                return Err(ctx.error(
+                    r.arg_pos(1),
+                    "XDAT",
+                    format!(
+                        "XASPHERE term {k} (r^{}) is not zero; flarebench reads up to r^16",
+                        2 * k
+                    ),
+                ));
+            }
+            continue;
+        }
+        // α_k (r/r0)^(2k) = (α_k / r0^(2k)) r^(2k).
+        asph[k - 1] = v / r0.powi(2 * k as i32);
+        spans.add("aspheric", "XDAT", r.arg_pos(1));
+    }
+    Ok(asph)
+}
+
+/// The medium after the surface: air without `GLAS`, else the resolved glass (a substitution
+/// recorded); a mirror is refused.
+fn read_medium(
+    ctx: &mut Reporter<'_>,
+    block: &Block<'_>,
+    glasses: &mut GlassLookup<'_>,
+    spans: &mut SurfaceSpans,
+) -> Result<Medium, LensFileError> {
+    match block.get("GLAS") {
+        None => Ok(Medium::Air),
+        Some(r) if r.arg(0) == Some("MIRROR") => Err(mirror_error(ctx, block, r)),
         Some(r) => {
             spans.add("refractiveIndex", "GLAS", r.arg_pos(0));
             spans.add("abbeNumber", "GLAS", r.arg_pos(0));
-            let g = glass::resolve(ctx, r, gcat, Some(lambda), glasses)?;
+            let g = glass::resolve(
+                ctx,
+                r,
+                glasses.gcat,
+                Some(glasses.lambda),
+                &mut glasses.seen,
+            )?;
             if let Some(s) = g.substitution {
-                substitutions.push(format!("SURF {n}: {s}"));
+                glasses
+                    .substitutions
+                    .push(format!("SURF {}: {s}", block.number));
             }
-            g.medium
-        }
-    };
-    for key in ["SQAP", "ELAP", "OBSC"] {
-        if let Some(r) = block.get(key) {
-            ctx.warn(
-                r.pos,
-                format!(
-                    "SURF {n}: the {key} aperture is not read; the surface is clipped by its \
-                     circular semi-diameter"
-                ),
-            );
+            Ok(g.medium)
         }
     }
-    let coating = block
-        .get("COAT")
-        .and_then(|r| r.arg(0))
-        .filter(|c| !c.is_empty() && !c.eq_ignore_ascii_case("NONE"))
-        .map(str::to_string);
-    if let Some(r) = block.get("COAT") {
-        spans.add("coating", "COAT", r.arg_pos(0));
-    }
+}
 
-    let mm = units.mm;
+/// The refracting surface in mm from its shape and even-asphere coefficients in lens units
+/// (`mm` millimetres each).
+fn refracting_surface(shape: &Shape, asph: &[f64; 8], medium: Medium, mm: f64) -> Surface {
     let mut aspheric = [0.0; 8];
     for (i, a) in asph.iter().enumerate() {
         // z = Σ aᵢ r^(2i): a coefficient in lens units^(1 − 2i) scales by mm^(1 − 2i).
         aspheric[i] = a * mm.powi(1 - 2 * (i as i32 + 1));
     }
-    let surface = Surface {
+    Surface {
         kind: SurfaceKind::Refracting,
-        curvature: curvature / mm,
-        conic,
+        curvature: shape.curvature / mm,
+        conic: shape.conic,
         aspheric,
-        thickness: thickness * mm,
+        thickness: shape.thickness * mm,
         medium,
-        semi_diameter: semi.map_or(1.0, |s| s * mm),
+        semi_diameter: shape.semi.map_or(1.0, |s| s * mm),
         ..Surface::spherical(0.0, 0.0, Medium::Air, 1.0)
-    };
-    Ok(Item::Surface(Box::new(Read {
-        surface,
-        given_semi: semi.map(|s| s * mm),
-        zemax: n,
-        spans,
-        stop: block.get("STOP").map(|r| r.pos),
-        coating,
-    })))
+    }
 }
 
 /// The clear semi-diameter in lens units: `CLAP` (circular aperture, `CLAP rmin rmax …`),
