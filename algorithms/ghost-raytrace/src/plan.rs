@@ -237,224 +237,297 @@ pub fn plan(
     frame: &Frame,
     opts: &PlanOptions<'_>,
 ) -> Result<Vec<LightPlan>, GhostRenderError> {
-    let PlanOptions {
-        quality,
-        bands,
-        min_bands,
-        band_spacing_px,
-        cull,
-        grid_scale,
-        smooth_grid_scale,
-        precomputed,
-        exact_tables,
-        max_downscale,
-        reflections,
-        lens_tables,
-    } = *opts;
-    let paths = enumerate_ghosts_of_order(system, reflections);
-    // The tables the plan traces bounds with, built only when something is traced (a frame
-    // whose every ghost is looked up in a table needs none).
-    let bounds_tables = OnceLock::new();
-    let tables =
-        || bounds_tables.get_or_init(|| InterfaceTableSet::for_system(system, BOUNDS_LAMBDA_NM));
-    let four = reflections == ReflectionOrder::Four;
-    // A table lacking some ghost: its bounds are traced, which needs the reference flux.
-    let table_lacks =
-        precomputed.is_some_and(|t| paths.iter().any(|p| t.ghost_index(*p).is_none()));
-    // The flux energy shares are measured against (the on-axis direct image's): for traced
-    // energies, and for the four-reflection bound; the same for every light.
-    let reference = (precomputed.is_none() || four || table_lacks)
-        .then(|| bounds::reference_flux(system, tables(), &mut GridTrace::default()));
-    lights
-        .iter()
-        .map(|light| {
-            let sampling = SpectralSampling::new(bands, light.spectrum)?;
-            let colours = GhostColours::new(system, light.spectrum, light.intensity as f32)?;
-            let theta = light.theta_deg.to_radians();
-            let phi = light.phi_deg.to_radians();
-            // Four-reflection ghosts whose energy bound is under the threshold are left out
-            // here, before anything of theirs is traced or looked up.
-            let mut bounded_out = Vec::new();
-            let candidates: Vec<GhostPath> = match reference {
-                Some(reference) if four && cull => {
-                    let refl = FourReflectionBounds::compute(system, tables(), theta, reference);
-                    let threshold = quality.energy_threshold();
-                    paths
-                        .iter()
-                        .copied()
-                        .filter(|p| {
-                            if !p.is_four() {
-                                return true;
-                            }
-                            // Every four-reflection path of the lens has a bound.
-                            let bound = refl.get(p).unwrap_or(f64::INFINITY);
-                            let keep = bound >= threshold;
-                            if !keep {
-                                bounded_out.push(DroppedGhost {
-                                    path: *p,
-                                    reason: DropReason::Bound,
-                                    energy_share: bound,
-                                });
-                            }
-                            keep
-                        })
-                        .collect()
-                }
-                _ => paths.clone(),
-            };
-            let mut not_in_table = Vec::new();
-            let found: Vec<(GhostPath, Option<GhostBounds>)> = match precomputed {
-                Some(table) => {
-                    let min = table.angles_deg.first().copied().unwrap_or(0.0);
-                    let max = table.angles_deg.last().copied().unwrap_or(0.0);
-                    if !(light.theta_deg >= min && light.theta_deg <= max) {
-                        return Err(GhostRenderError::OutsideTable {
-                            theta_deg: light.theta_deg,
-                            min_deg: min,
-                            max_deg: max,
-                        });
-                    }
-                    // A ghost missing from the table (a four-reflection ghost of a table made
-                    // without them or with a higher bound threshold; a ghost straddling the
-                    // stop in an OpenLensFlare file) is traced, as without a table.
-                    not_in_table = candidates
-                        .iter()
-                        .copied()
-                        .filter(|&p| table.ghost_index(p).is_none())
-                        .collect();
-                    candidates
-                        .par_iter()
-                        .map_init(GridTrace::default, |scratch, &p| {
-                            let b = match (table.ghost_index(p), reference) {
-                                (Some(g), _) => table.lookup(g, light.theta_deg),
-                                (None, Some(reference)) => {
-                                    bounds::precise(system, p, tables(), theta, reference, scratch)
-                                }
-                                // `reference` is traced whenever the table lacks a ghost.
-                                (None, None) => None,
-                            };
-                            (p, b)
-                        })
-                        .collect()
-                }
-                None => {
-                    let reference = reference.unwrap_or_default();
-                    candidates
-                        .par_iter()
-                        .map_init(GridTrace::default, |scratch, &path| {
-                            (
-                                path,
-                                bounds::precise(system, path, tables(), theta, reference, scratch),
-                            )
-                        })
-                        .collect()
-                }
-            };
-            let (lo, hi) = (
-                sampling.wavelengths_nm()[0],
-                sampling.wavelengths_nm()[bands - 1],
-            );
-            // (m, i) → index into `bins` (and then the plan's bands) of bin i of an m-band
-            // sampling: only the bins some ghost is traced at get a band.
-            let mut bins: Vec<Bin> = Vec::new();
-            let mut band_index: HashMap<(usize, usize), usize> = HashMap::new();
-            let on_frame = |b: &GhostBounds| overlaps_frame(&b.sensor.rotated(phi), frame);
-            let dim_below = if cull {
-                dim_threshold(
-                    found
-                        .iter()
-                        .filter_map(|(_, b)| b.as_ref().filter(|b| on_frame(b)))
-                        .map(|b| b.energy_share),
-                    quality.dim_budget(),
-                )
-            } else {
-                0.0
-            };
-            let mut ghosts = Vec::new();
-            let mut dropped = Vec::new();
-            for (path, b) in found {
-                let Some(b) = b else {
-                    dropped.push(DroppedGhost {
-                        path,
-                        reason: DropReason::NoLight,
-                        energy_share: 0.0,
-                    });
-                    continue;
-                };
-                let drop = |reason| DroppedGhost {
-                    path,
-                    reason,
-                    energy_share: b.energy_share,
-                };
-                if cull && !on_frame(&b) {
-                    dropped.push(drop(DropReason::OffFrame));
-                    continue;
-                }
-                if cull && b.energy_share < dim_below {
-                    dropped.push(drop(DropReason::Dim));
-                    continue;
-                }
-                let cap = (MAX_GRID as f64 * grid_scale.max(1.0)).ceil() as usize;
-                let scale = if b.grid <= SMOOTH_GRID {
-                    grid_scale * smooth_grid_scale
-                } else {
-                    grid_scale
-                };
-                let grid = ((b.grid as f64 * scale).round() as usize).clamp(MIN_GRID / 2, cap);
-                let downscale = coarse_factor(
-                    &b.sensor,
-                    grid,
-                    frame,
-                    max_downscale,
-                    quality.coarse_pixels_per_radius(),
-                );
-                // Enough bands that neighbouring ones move the ghost by at most the spacing:
-                // m bands over a dispersion of D drawn pixels step D/(m − 1).
-                let groups = {
-                    let d = dispersion_px(system, path, theta, lo, hi, frame) / downscale as f64;
-                    let m = if d.is_finite() {
-                        ((d / band_spacing_px).ceil() as usize).saturating_add(1)
-                    } else {
-                        bands
-                    };
-                    m.min(bands).max(min_bands.min(bands)).max(1)
-                };
-                // The ghost's own sampling: `groups` equal bins, each traced at its centre
-                // in the colour of its whole bin. (Grouping the light's bands unevenly
-                // instead — 31 into 16, say — draws copies of uneven weight and spacing.)
-                let ghost_bands = (0..groups)
-                    .map(|i| {
-                        let band = *band_index.entry((groups, i)).or_insert_with(|| {
-                            bins.push(Bin::new(system, groups, i));
-                            bins.len() - 1
-                        });
-                        GhostBand {
-                            band,
-                            rgb: colours.bin_colour(path, &bins[band]),
-                        }
-                    })
-                    .collect();
-                ghosts.push(GhostJob {
-                    path,
-                    bounds: b,
-                    grid,
-                    downscale,
-                    bands: ghost_bands,
-                    energy_share: b.energy_share,
-                });
-            }
-            dropped.extend(bounded_out);
-            Ok(LightPlan {
-                light: light.clone(),
-                bands: band_tables(system, &bins, exact_tables, lens_tables),
-                sampled: bands,
-                ghosts,
-                dropped,
-                reflections,
-                not_in_table,
-            })
+    let planner = Planner::new(system, frame, opts);
+    lights.iter().map(|light| planner.light(light)).collect()
+}
+
+/// What the plans of a scene's lights share: the lens, frame and options, the ghost paths, the
+/// tables bounds are traced with and the reference flux.
+struct Planner<'p, 'o> {
+    system: &'p LensSystem,
+    frame: &'p Frame,
+    opts: &'p PlanOptions<'o>,
+    paths: Vec<GhostPath>,
+    /// The tables the plan traces bounds with, built only when something is traced (a frame
+    /// whose every ghost is looked up in a table needs none).
+    bounds_tables: OnceLock<InterfaceTableSet>,
+    /// The flux energy shares are measured against (the on-axis direct image's): for traced
+    /// energies, and for the four-reflection bound; the same for every light.
+    reference: Option<f64>,
+}
+
+/// A ghost path with its bounds (`None`: no light).
+type Found = (GhostPath, Option<GhostBounds>);
+
+/// One light as its ghosts are planned: its direction (radians), its band range (nm) and the
+/// ghosts' colours.
+struct LightJob {
+    theta: f64,
+    phi: f64,
+    lo: f64,
+    hi: f64,
+    colours: GhostColours,
+}
+
+/// The bins a light's ghosts are traced at, each once: `(m, i)` → index into `bins` (and then
+/// the plan's bands) of bin i of an m-band sampling.
+#[derive(Default)]
+struct Bins {
+    bins: Vec<Bin>,
+    index: HashMap<(usize, usize), usize>,
+}
+
+impl Bins {
+    /// The band of bin `i` of an `m`-band sampling, made the first time it is asked for.
+    fn band(&mut self, system: &LensSystem, m: usize, i: usize) -> usize {
+        *self.index.entry((m, i)).or_insert_with(|| {
+            self.bins.push(Bin::new(system, m, i));
+            self.bins.len() - 1
         })
-        .collect()
+    }
+}
+
+impl<'p, 'o> Planner<'p, 'o> {
+    fn new(system: &'p LensSystem, frame: &'p Frame, opts: &'p PlanOptions<'o>) -> Self {
+        let paths = enumerate_ghosts_of_order(system, opts.reflections);
+        let mut planner = Planner {
+            system,
+            frame,
+            opts,
+            paths,
+            bounds_tables: OnceLock::new(),
+            reference: None,
+        };
+        let four = opts.reflections == ReflectionOrder::Four;
+        // A table lacking some ghost: its bounds are traced, which needs the reference flux.
+        let table_lacks = opts
+            .precomputed
+            .is_some_and(|t| planner.paths.iter().any(|p| t.ghost_index(*p).is_none()));
+        let reference = (opts.precomputed.is_none() || four || table_lacks)
+            .then(|| bounds::reference_flux(system, planner.tables(), &mut GridTrace::default()));
+        planner.reference = reference;
+        planner
+    }
+
+    fn tables(&self) -> &InterfaceTableSet {
+        self.bounds_tables
+            .get_or_init(|| InterfaceTableSet::for_system(self.system, BOUNDS_LAMBDA_NM))
+    }
+
+    /// One light's plan.
+    fn light(&self, light: &LightSpec) -> Result<LightPlan, GhostRenderError> {
+        let (system, opts) = (self.system, self.opts);
+        let sampling = SpectralSampling::new(opts.bands, light.spectrum)?;
+        let job = LightJob {
+            colours: GhostColours::new(system, light.spectrum, light.intensity as f32)?,
+            theta: light.theta_deg.to_radians(),
+            phi: light.phi_deg.to_radians(),
+            lo: sampling.wavelengths_nm()[0],
+            hi: sampling.wavelengths_nm()[opts.bands - 1],
+        };
+        let (candidates, bounded_out) = self.bound_four(job.theta);
+        let (found, not_in_table) = self.find_bounds(light, job.theta, &candidates)?;
+        let on_frame = |b: &GhostBounds| overlaps_frame(&b.sensor.rotated(job.phi), self.frame);
+        let dim_below = if opts.cull {
+            dim_threshold(
+                found
+                    .iter()
+                    .filter_map(|(_, b)| b.as_ref().filter(|b| on_frame(b)))
+                    .map(|b| b.energy_share),
+                opts.quality.dim_budget(),
+            )
+        } else {
+            0.0
+        };
+        let mut bins = Bins::default();
+        let mut ghosts = Vec::new();
+        let mut dropped = Vec::new();
+        for (path, b) in found {
+            let Some(b) = b else {
+                dropped.push(DroppedGhost {
+                    path,
+                    reason: DropReason::NoLight,
+                    energy_share: 0.0,
+                });
+                continue;
+            };
+            let drop = |reason| DroppedGhost {
+                path,
+                reason,
+                energy_share: b.energy_share,
+            };
+            if opts.cull && !on_frame(&b) {
+                dropped.push(drop(DropReason::OffFrame));
+                continue;
+            }
+            if opts.cull && b.energy_share < dim_below {
+                dropped.push(drop(DropReason::Dim));
+                continue;
+            }
+            ghosts.push(self.ghost_job(path, b, &job, &mut bins));
+        }
+        dropped.extend(bounded_out);
+        Ok(LightPlan {
+            light: light.clone(),
+            bands: band_tables(system, &bins.bins, opts.exact_tables, opts.lens_tables),
+            sampled: opts.bands,
+            ghosts,
+            dropped,
+            reflections: opts.reflections,
+            not_in_table,
+        })
+    }
+
+    /// The paths whose bounds are found for a light at `theta` (radians): all of them, but for
+    /// four-reflection ghosts when culling, those whose energy bound is under the threshold are
+    /// left out here (returned as dropped), before anything of theirs is traced or looked up.
+    fn bound_four(&self, theta: f64) -> (Vec<GhostPath>, Vec<DroppedGhost>) {
+        let mut bounded_out = Vec::new();
+        let four = self.opts.reflections == ReflectionOrder::Four;
+        let candidates = match self.reference {
+            Some(reference) if four && self.opts.cull => {
+                let refl =
+                    FourReflectionBounds::compute(self.system, self.tables(), theta, reference);
+                let threshold = self.opts.quality.energy_threshold();
+                self.paths
+                    .iter()
+                    .copied()
+                    .filter(|p| {
+                        if !p.is_four() {
+                            return true;
+                        }
+                        // Every four-reflection path of the lens has a bound.
+                        let bound = refl.get(p).unwrap_or(f64::INFINITY);
+                        let keep = bound >= threshold;
+                        if !keep {
+                            bounded_out.push(DroppedGhost {
+                                path: *p,
+                                reason: DropReason::Bound,
+                                energy_share: bound,
+                            });
+                        }
+                        keep
+                    })
+                    .collect()
+            }
+            _ => self.paths.clone(),
+        };
+        (candidates, bounded_out)
+    }
+
+    /// Each candidate's bounds (`None`: no light), looked up in the precomputed table or
+    /// traced, and the candidates the table lacks; a light outside the table's angles is an
+    /// error.
+    fn find_bounds(
+        &self,
+        light: &LightSpec,
+        theta: f64,
+        candidates: &[GhostPath],
+    ) -> Result<(Vec<Found>, Vec<GhostPath>), GhostRenderError> {
+        let system = self.system;
+        let Some(table) = self.opts.precomputed else {
+            let reference = self.reference.unwrap_or_default();
+            let found = candidates
+                .par_iter()
+                .map_init(GridTrace::default, |scratch, &path| {
+                    (
+                        path,
+                        bounds::precise(system, path, self.tables(), theta, reference, scratch),
+                    )
+                })
+                .collect();
+            return Ok((found, Vec::new()));
+        };
+        let min = table.angles_deg.first().copied().unwrap_or(0.0);
+        let max = table.angles_deg.last().copied().unwrap_or(0.0);
+        if !(light.theta_deg >= min && light.theta_deg <= max) {
+            return Err(GhostRenderError::OutsideTable {
+                theta_deg: light.theta_deg,
+                min_deg: min,
+                max_deg: max,
+            });
+        }
+        // A ghost missing from the table (a four-reflection ghost of a table made without them
+        // or with a higher bound threshold; a ghost straddling the stop in an OpenLensFlare
+        // file) is traced, as without a table.
+        let not_in_table = candidates
+            .iter()
+            .copied()
+            .filter(|&p| table.ghost_index(p).is_none())
+            .collect();
+        let found = candidates
+            .par_iter()
+            .map_init(GridTrace::default, |scratch, &p| {
+                let b = match (table.ghost_index(p), self.reference) {
+                    (Some(g), _) => table.lookup(g, light.theta_deg),
+                    (None, Some(reference)) => {
+                        bounds::precise(system, p, self.tables(), theta, reference, scratch)
+                    }
+                    // `reference` is traced whenever the table lacks a ghost.
+                    (None, None) => None,
+                };
+                (p, b)
+            })
+            .collect();
+        Ok((found, not_in_table))
+    }
+
+    /// A kept ghost's job: its grid, coarse factor, bands and their colours.
+    fn ghost_job(
+        &self,
+        path: GhostPath,
+        b: GhostBounds,
+        job: &LightJob,
+        bins: &mut Bins,
+    ) -> GhostJob {
+        let (system, opts, frame) = (self.system, self.opts, self.frame);
+        let cap = (MAX_GRID as f64 * opts.grid_scale.max(1.0)).ceil() as usize;
+        let scale = if b.grid <= SMOOTH_GRID {
+            opts.grid_scale * opts.smooth_grid_scale
+        } else {
+            opts.grid_scale
+        };
+        let grid = ((b.grid as f64 * scale).round() as usize).clamp(MIN_GRID / 2, cap);
+        let downscale = coarse_factor(
+            &b.sensor,
+            grid,
+            frame,
+            opts.max_downscale,
+            opts.quality.coarse_pixels_per_radius(),
+        );
+        // Enough bands that neighbouring ones move the ghost by at most the spacing:
+        // m bands over a dispersion of D drawn pixels step D/(m − 1).
+        let groups = {
+            let d =
+                dispersion_px(system, path, job.theta, job.lo, job.hi, frame) / downscale as f64;
+            let m = if d.is_finite() {
+                ((d / opts.band_spacing_px).ceil() as usize).saturating_add(1)
+            } else {
+                opts.bands
+            };
+            m.min(opts.bands).max(opts.min_bands.min(opts.bands)).max(1)
+        };
+        // The ghost's own sampling: `groups` equal bins, each traced at its centre in the colour
+        // of its whole bin. (Grouping the light's bands unevenly instead — 31 into 16, say —
+        // draws copies of uneven weight and spacing.)
+        let ghost_bands = (0..groups)
+            .map(|i| {
+                let band = bins.band(system, groups, i);
+                GhostBand {
+                    band,
+                    rgb: job.colours.bin_colour(path, &bins.bins[band]),
+                }
+            })
+            .collect();
+        GhostJob {
+            path,
+            bounds: b,
+            grid,
+            downscale,
+            bands: ghost_bands,
+            energy_share: b.energy_share,
+        }
+    }
 }
 
 /// Drawn pixels by which neighbouring bands of a ghost may move it (paraxially), for the

@@ -567,27 +567,102 @@ impl PluginInstance<'_> {
         image: &mut HdrImage,
     ) -> Result<RenderStats, PluginCallError> {
         self.usable()?;
-        let name = || self.plugin.name.clone();
-        let minor = self.plugin.abi_minor;
-        // What only ABI 1.1 can say: refused for a 1.0 plugin, which would misread it.
-        let needs_1_1 = |what: String| {
-            if minor >= 1 {
-                return Ok(());
+        let (aperture, mask) = self.aperture_input(&scene.aperture)?;
+        let (lights, exts) = self.light_inputs(scene)?;
+        let input = self.scene_input(scene, aperture, mask, (&lights, &exts))?;
+        let f = scene.frame;
+        loop {
+            clear_frame(image, f.width, f.height);
+            let (vcap, tcap) = self.mesh_capacity;
+            let mut vertices = vec![
+                MeshVertex {
+                    x: 0.0,
+                    y: 0.0,
+                    rgb: [0.0; 3]
+                };
+                vcap as usize
+            ];
+            let mut triangles = vec![[0u32; 3]; tcap as usize];
+            let mut output = RenderOutput {
+                image: ImageBuffer {
+                    pixels: image.pixels.as_mut_ptr().cast::<f32>(),
+                    width: input.width,
+                    height: input.height,
+                },
+                mesh: MeshBuffer {
+                    vertices: vertices.as_mut_ptr(),
+                    vertex_capacity: vcap,
+                    vertex_count: 0,
+                    triangles: triangles.as_mut_ptr(),
+                    triangle_capacity: tcap,
+                    triangle_count: 0,
+                },
+                items_drawn: 0,
+                reserved: 0,
+            };
+            let mut err = ErrorMessage::new();
+            let Ok(count) = u32::try_from(values.len()) else {
+                return Err(self.unsupported("too many parameter values".into()));
+            };
+            // SAFETY: `render` comes from a checked header; the instance is live; the scene,
+            // lights, light extensions, mask (borrowed from `scene`), values, image, mesh
+            // buffers (with the capacities stated) and the error buffer are valid and outlive
+            // the call; nothing else accesses them meanwhile.
+            let code = unsafe {
+                (self.plugin.functions.render)(
+                    self.ptr,
+                    &input,
+                    values.as_ptr(),
+                    count,
+                    &mut output,
+                    &mut err.buf,
+                )
+            };
+            if code == status::MESH_CAPACITY {
+                self.grow_mesh((output.mesh.vertex_count, output.mesh.triangle_count))?;
+                continue;
             }
-            Err(PluginCallError::Unsupported {
-                plugin: name(),
-                reason: format!(
-                    "{what} needs plugin ABI {ABI_MAJOR}.1, but the plugin was built for ABI \
-                     {ABI_MAJOR}.{minor} (sdk {}); rebuild it against this sdk",
-                    self.plugin.sdk_version
-                ),
-            })
-        };
-        let too_large = |what: &str| PluginCallError::Unsupported {
-            plugin: name(),
-            reason: format!("{what} too large"),
-        };
-        let (aperture, mask) = match &scene.aperture {
+            let r = self.plugin.check("render", code, &err);
+            self.after(r)?;
+            let counts = (
+                output.mesh.vertex_count as usize,
+                output.mesh.triangle_count as usize,
+            );
+            let nt = self.check_and_draw(image, counts, &vertices, &triangles)?;
+            return Ok(RenderStats {
+                items_drawn: output.items_drawn,
+                mesh_triangles: nt,
+            });
+        }
+    }
+
+    /// [`PluginCallError::Unsupported`] from this plugin.
+    fn unsupported(&self, reason: String) -> PluginCallError {
+        PluginCallError::Unsupported {
+            plugin: self.plugin.name.clone(),
+            reason,
+        }
+    }
+
+    /// What only ABI 1.1 can say (`what`): refused for a 1.0 plugin, which would misread it.
+    fn needs_1_1(&self, what: String) -> Result<(), PluginCallError> {
+        let minor = self.plugin.abi_minor;
+        if minor >= 1 {
+            return Ok(());
+        }
+        Err(self.unsupported(format!(
+            "{what} needs plugin ABI {ABI_MAJOR}.1, but the plugin was built for ABI \
+             {ABI_MAJOR}.{minor} (sdk {}); rebuild it against this sdk",
+            self.plugin.sdk_version
+        )))
+    }
+
+    /// The aperture as the ABI describes it, and a mask's width, height and pixels.
+    fn aperture_input(
+        &self,
+        aperture: &Aperture,
+    ) -> Result<(v1::ApertureInput, Option<MaskInput>), PluginCallError> {
+        Ok(match aperture {
             Aperture::Circular => (
                 v1::ApertureInput {
                     kind: v1::aperture_kind::CIRCULAR,
@@ -611,9 +686,9 @@ impl PluginInstance<'_> {
                 None,
             ),
             Aperture::Mask(m) => {
-                needs_1_1("an aperture mask image".into())?;
+                self.needs_1_1("an aperture mask image".into())?;
                 let (Ok(w), Ok(h)) = (u32::try_from(m.width()), u32::try_from(m.height())) else {
-                    return Err(too_large("aperture mask"));
+                    return Err(self.unsupported("aperture mask too large".into()));
                 };
                 let input = v1::ApertureInput {
                     kind: v1::aperture_kind::MASK,
@@ -623,7 +698,14 @@ impl PluginInstance<'_> {
                 };
                 (input, Some((w, h, m.data().as_ptr())))
             }
-        };
+        })
+    }
+
+    /// The scene's lights as the ABI describes them, with their spectrum extensions (1.1).
+    fn light_inputs(
+        &self,
+        scene: &Scene,
+    ) -> Result<(Vec<LightInput>, Vec<LightExt>), PluginCallError> {
         let mut lights = Vec::with_capacity(scene.lights.len());
         let mut exts = Vec::with_capacity(scene.lights.len());
         for (i, l) in scene.lights.iter().enumerate() {
@@ -634,7 +716,7 @@ impl PluginInstance<'_> {
                 LightSpectrum::Flat => (KELVIN_SEE_EXT, Some((light_spectrum::FLAT, [0.0; 3]))),
             };
             if ext.is_some() {
-                needs_1_1(format!("light {i}'s spectrum {:?}", l.spectrum))?;
+                self.needs_1_1(format!("light {i}'s spectrum {:?}", l.spectrum))?;
             }
             let (spectrum, rgb) = ext.unwrap_or((light_spectrum::KELVIN, [0.0; 3]));
             exts.push(LightExt { spectrum, rgb });
@@ -645,6 +727,17 @@ impl PluginInstance<'_> {
                 kelvin,
             });
         }
+        Ok((lights, exts))
+    }
+
+    /// The scene input, in the host's minor; it points into `lights`, `exts` and the mask.
+    fn scene_input(
+        &self,
+        scene: &Scene,
+        aperture: v1::ApertureInput,
+        mask: Option<MaskInput>,
+        (lights, exts): (&[LightInput], &[LightExt]),
+    ) -> Result<SceneInput, PluginCallError> {
         // Only when some light needs it: a scene 1.0 could say stays as 1.0 said it.
         let light_ext = if exts.iter().any(|e| e.spectrum != light_spectrum::KELVIN) {
             exts.as_ptr()
@@ -657,10 +750,10 @@ impl PluginInstance<'_> {
             u32::try_from(f.height),
             u32::try_from(lights.len()),
         ) else {
-            return Err(too_large("frame or light count"));
+            return Err(self.unsupported("frame or light count too large".into()));
         };
         let (mask_width, mask_height, mask) = mask.unwrap_or((0, 0, std::ptr::null()));
-        let input = SceneInput {
+        Ok(SceneInput {
             struct_size: size_of::<SceneInput>() as u32,
             light_count,
             lights: lights.as_ptr(),
@@ -673,124 +766,87 @@ impl PluginInstance<'_> {
             mask_height,
             mask,
             light_ext,
-        };
-        loop {
-            image.width = f.width;
-            image.height = f.height;
-            if image.pixels.len() == f.width * f.height {
-                // The same buffer as the last frame's: cleared on every core.
-                image.fill_black();
-            } else {
-                image.pixels.clear();
-                image.pixels.resize(f.width * f.height, [0.0; 3]);
-            }
-            let (vcap, tcap) = self.mesh_capacity;
-            let mut vertices = vec![
-                MeshVertex {
-                    x: 0.0,
-                    y: 0.0,
-                    rgb: [0.0; 3]
-                };
-                vcap as usize
-            ];
-            let mut triangles = vec![[0u32; 3]; tcap as usize];
-            let mut output = RenderOutput {
-                image: ImageBuffer {
-                    pixels: image.pixels.as_mut_ptr().cast::<f32>(),
-                    width,
-                    height,
-                },
-                mesh: MeshBuffer {
-                    vertices: vertices.as_mut_ptr(),
-                    vertex_capacity: vcap,
-                    vertex_count: 0,
-                    triangles: triangles.as_mut_ptr(),
-                    triangle_capacity: tcap,
-                    triangle_count: 0,
-                },
-                items_drawn: 0,
-                reserved: 0,
-            };
-            let mut err = ErrorMessage::new();
-            let Ok(count) = u32::try_from(values.len()) else {
-                return Err(PluginCallError::Unsupported {
-                    plugin: name(),
-                    reason: "too many parameter values".into(),
-                });
-            };
-            // SAFETY: `render` comes from a checked header; the instance is live; the scene,
-            // lights, light extensions, mask (borrowed from `scene`), values, image, mesh
-            // buffers (with the capacities stated) and the error buffer are valid and outlive
-            // the call; nothing else accesses them meanwhile.
-            let code = unsafe {
-                (self.plugin.functions.render)(
-                    self.ptr,
-                    &input,
-                    values.as_ptr(),
-                    count,
-                    &mut output,
-                    &mut err.buf,
-                )
-            };
-            if code == status::MESH_CAPACITY {
-                let need = (output.mesh.vertex_count, output.mesh.triangle_count);
-                if need.0 <= vcap && need.1 <= tcap {
-                    return Err(PluginCallError::BadMesh {
-                        plugin: name(),
-                        reason: format!(
-                            "asked for capacity {need:?} but already had ({vcap}, {tcap})"
-                        ),
-                    });
-                }
-                self.mesh_capacity = (need.0.max(vcap), need.1.max(tcap));
-                continue;
-            }
-            let r = self.plugin.check("render", code, &err);
-            self.after(r)?;
-            let (nv, nt) = (
-                output.mesh.vertex_count as usize,
-                output.mesh.triangle_count as usize,
-            );
-            if nv > vcap as usize || nt > tcap as usize {
-                return Err(PluginCallError::BadMesh {
-                    plugin: name(),
-                    reason: format!("counts {nv}/{nt} exceed the capacities {vcap}/{tcap}"),
-                });
-            }
-            check_finite(image).map_err(|(count, x, y)| PluginCallError::NonFinite {
-                plugin: name(),
-                count,
-                x,
-                y,
-            })?;
-            if nt > 0 {
-                let vs = &vertices[..nv];
-                let ts = &triangles[..nt];
-                if let Some(t) = ts.iter().find(|t| t.iter().any(|&i| i as usize >= nv)) {
-                    return Err(PluginCallError::BadMesh {
-                        plugin: name(),
-                        reason: format!("triangle {t:?} indexes past {nv} vertices"),
-                    });
-                }
-                if let Some(v) = vs.iter().find(|v| {
-                    ![v.x, v.y, v.rgb[0], v.rgb[1], v.rgb[2]]
-                        .iter()
-                        .all(|c| c.is_finite())
-                }) {
-                    return Err(PluginCallError::BadMesh {
-                        plugin: name(),
-                        reason: format!("vertex {v:?} is not finite"),
-                    });
-                }
-                let positions: Vec<[f32; 2]> = vs.iter().map(|v| [v.x, v.y]).collect();
-                let attrs: Vec<[f32; 3]> = vs.iter().map(|v| v.rgb).collect();
-                rasterize(image, &positions, &attrs, ts, |&c| c);
-            }
-            return Ok(RenderStats {
-                items_drawn: output.items_drawn,
-                mesh_triangles: nt,
+        })
+    }
+
+    /// After [`status::MESH_CAPACITY`]: the capacities the plugin asked for, which must exceed
+    /// the ones it had.
+    fn grow_mesh(&mut self, need: (u32, u32)) -> Result<(), PluginCallError> {
+        let (vcap, tcap) = self.mesh_capacity;
+        if need.0 <= vcap && need.1 <= tcap {
+            return Err(PluginCallError::BadMesh {
+                plugin: self.plugin.name.clone(),
+                reason: format!("asked for capacity {need:?} but already had ({vcap}, {tcap})"),
             });
         }
+        self.mesh_capacity = (need.0.max(vcap), need.1.max(tcap));
+        Ok(())
+    }
+
+    /// Checks a successful render's output — mesh counts within the capacities, a finite image,
+    /// a well-formed mesh — and rasterizes the mesh into `image`. Returns the triangle count.
+    fn check_and_draw(
+        &self,
+        image: &mut HdrImage,
+        (nv, nt): (usize, usize),
+        vertices: &[MeshVertex],
+        triangles: &[[u32; 3]],
+    ) -> Result<usize, PluginCallError> {
+        let name = || self.plugin.name.clone();
+        let (vcap, tcap) = self.mesh_capacity;
+        if nv > vcap as usize || nt > tcap as usize {
+            return Err(PluginCallError::BadMesh {
+                plugin: name(),
+                reason: format!("counts {nv}/{nt} exceed the capacities {vcap}/{tcap}"),
+            });
+        }
+        check_finite(image).map_err(|(count, x, y)| PluginCallError::NonFinite {
+            plugin: name(),
+            count,
+            x,
+            y,
+        })?;
+        if nt > 0 {
+            let vs = &vertices[..nv];
+            let ts = &triangles[..nt];
+            if let Some(t) = ts.iter().find(|t| t.iter().any(|&i| i as usize >= nv)) {
+                return Err(PluginCallError::BadMesh {
+                    plugin: name(),
+                    reason: format!("triangle {t:?} indexes past {nv} vertices"),
+                });
+            }
+            if let Some(v) = vs.iter().find(|v| {
+                ![v.x, v.y, v.rgb[0], v.rgb[1], v.rgb[2]]
+                    .iter()
+                    .all(|c| c.is_finite())
+            }) {
+                return Err(PluginCallError::BadMesh {
+                    plugin: name(),
+                    reason: format!("vertex {v:?} is not finite"),
+                });
+            }
+            let positions: Vec<[f32; 2]> = vs.iter().map(|v| [v.x, v.y]).collect();
+            let attrs: Vec<[f32; 3]> = vs.iter().map(|v| v.rgb).collect();
+            rasterize(image, &positions, &attrs, ts, |&c| c);
+        }
+        Ok(nt)
+    }
+}
+
+/// An aperture mask for the ABI: width, height and its row-major pixels (borrowed).
+type MaskInput = (u32, u32, *const f32);
+
+/// Sizes `image` to `width × height` and clears it: on every core when it already has that
+/// size (the last frame's buffer), else by refilling.
+fn clear_frame(image: &mut HdrImage, width: usize, height: usize) {
+    image.width = width;
+    image.height = height;
+    if image.pixels.len() == width * height {
+        // The same buffer as the last frame's: cleared on every core.
+        image.fill_black();
+    } else {
+        image.pixels.clear();
+        image.pixels.resize(width * height, [0.0; 3]);
     }
 }
 
