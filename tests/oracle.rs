@@ -26,6 +26,20 @@ use serde::Deserialize;
 const TOL: f64 = 1e-9;
 /// The d line, where every medium has index nd in the oracle.
 const LAMBDA_D_NM: f64 = 587.5618;
+/// A surface's curvature against 1/R of the oracle's radius (relative): f64 rounding of one
+/// division.
+const CURVATURE_REL_TOL: f64 = 1e-15;
+/// A medium's index at the d line against the oracle's nd: f64 rounding.
+const INDEX_TOL: f64 = 1e-15;
+/// The lens file's sensor against the oracle's paraxial focus (mm): the file writes it with
+/// fewer digits.
+const FILE_SENSOR_TOL_MM: f64 = 1e-5;
+/// Vertex positions against the oracle's (mm): f64 rounding of the summed thicknesses.
+const VERTEX_Z_TOL_MM: f64 = 1e-12;
+/// A collimated start ray against the generator's, same formula (mm): libm rounding.
+const START_ORIGIN_TOL_MM: f64 = 1e-14;
+/// A collimated start ray's direction cosines against the generator's: libm rounding.
+const START_DIRECTION_TOL: f64 = 1e-15;
 
 #[derive(Deserialize)]
 struct OracleFile {
@@ -135,7 +149,7 @@ fn load_system(oracle: &OracleFile) -> LensSystem {
             1.0 / p.radius_mm
         };
         assert!(
-            (s.curvature - c).abs() <= 1e-15 * c.abs(),
+            (s.curvature - c).abs() <= CURVATURE_REL_TOL * c.abs(),
             "{ctx}: curvature {} in the lens file, 1/{} in the oracle",
             s.curvature,
             p.radius_mm
@@ -143,7 +157,7 @@ fn load_system(oracle: &OracleFile) -> LensSystem {
         assert!(s.conic == 0.0 && !s.is_aspheric(), "{ctx}: not spherical");
         if i < sensor {
             assert!(
-                (n[i + 1] - p.n_after).abs() <= 1e-15,
+                (n[i + 1] - p.n_after).abs() <= INDEX_TOL,
                 "{ctx}: index {} at the d line, oracle {}",
                 n[i + 1],
                 p.n_after
@@ -163,7 +177,7 @@ fn load_system(oracle: &OracleFile) -> LensSystem {
             let z_last = system.vertex_z()[last];
             let file_sensor = system.vertex_z()[sensor];
             assert!(
-                (file_sensor - oracle.image_plane_z_mm).abs() < 1e-5,
+                (file_sensor - oracle.image_plane_z_mm).abs() < FILE_SENSOR_TOL_MM,
                 "{}: the lens file's sensor z {file_sensor} is not at the paraxial focus {}",
                 oracle.lens,
                 oracle.image_plane_z_mm
@@ -175,12 +189,12 @@ fn load_system(oracle: &OracleFile) -> LensSystem {
     let z = system.vertex_z();
     for (i, (a, b)) in z.iter().zip(&oracle.vertex_z_mm).enumerate() {
         assert!(
-            (a - b).abs() <= 1e-12,
+            (a - b).abs() <= VERTEX_Z_TOL_MM,
             "{}: vertex {i} at z = {a}, oracle {b}",
             oracle.lens
         );
     }
-    assert!((z[sensor] - oracle.image_plane_z_mm).abs() <= 1e-12);
+    assert!((z[sensor] - oracle.image_plane_z_mm).abs() <= VERTEX_Z_TOL_MM);
     system
 }
 
@@ -193,8 +207,14 @@ fn start_ray(r: &OracleRay, ctx: &str) -> Ray {
                 r.height_mm,
             );
             // The generator evaluated the same formula; only libm rounding may differ.
-            assert!(max_abs_diff(ray.origin, r.origin) <= 1e-14, "{ctx}: origin");
-            assert!(max_abs_diff(ray.dir, r.dir) <= 1e-15, "{ctx}: direction");
+            assert!(
+                max_abs_diff(ray.origin, r.origin) <= START_ORIGIN_TOL_MM,
+                "{ctx}: origin"
+            );
+            assert!(
+                max_abs_diff(ray.dir, r.dir) <= START_DIRECTION_TOL,
+                "{ctx}: direction"
+            );
             ray
         }
         "skew" => Ray {

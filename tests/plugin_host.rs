@@ -71,6 +71,9 @@ fn the_example_plugin_library_loads_and_describes_itself() {
 /// within f32 summation (measured 2e-7); the centroid of the samples is the centre to 1e-6 px.
 const GLOW_ENERGY_TOL: f64 = 1e-5;
 const GLOW_CENTROID_TOL_PX: f64 = 1e-3;
+/// Sum of a 16 × 8 f32 image (every pixel 0.5 plus a triangle of 4): f32 rounding of the pixels
+/// and the sum.
+const IMAGE_SUM_TOL: f64 = 1e-4;
 
 #[test]
 fn the_example_glow_puts_gain_times_intensity_at_the_lights_paraxial_image() {
@@ -106,7 +109,7 @@ fn a_well_behaved_render_adds_its_image_and_its_rasterized_mesh() {
     // Every pixel 0.5, plus the triangle: area 8 px² × radiance 0.5 = 4, per channel.
     let sum = out.image.sum();
     for c in sum {
-        assert!((c - (0.5 * 128.0 + 4.0)).abs() < 1e-4, "{sum:?}");
+        assert!((c - (0.5 * 128.0 + 4.0)).abs() < IMAGE_SUM_TOL, "{sum:?}");
     }
     assert_eq!(out.mesh_triangles, 1);
 }

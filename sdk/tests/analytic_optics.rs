@@ -7,6 +7,46 @@ use glam::DVec3;
 
 const LAMBDA: f64 = 587.5618;
 
+/// EFL of a 1e-6 mm thick lens against the thin-lens formula (mm): covers the thickness term
+/// the thin-lens formula drops and f64 rounding.
+const THIN_LENS_EFL_TOL_MM: f64 = 1e-5;
+/// EFL, BFL and FFL of a thick lens against the lensmaker closed form (mm): f64 rounding of the
+/// paraxial trace and of the closed form over a few operations.
+const THICK_LENS_TOL_MM: f64 = 1e-9;
+/// Paraxial EFL/BFL and focus shift against a closed form (mm): f64 rounding of the paraxial
+/// trace through a handful of surfaces.
+const PARAXIAL_TOL_MM: f64 = 1e-12;
+/// Height at the paraxial focus of a ray 1e-4 mm off axis (mm): its residual aberration and
+/// f64 rounding.
+const PARAXIAL_FOCUS_HEIGHT_MM: f64 = 1e-9;
+/// Components and length of a unit direction after one flat refraction: f64 rounding of a few
+/// operations on numbers of order one.
+const UNIT_DIRECTION_TOL: f64 = 1e-15;
+/// n1 sin θ1 − n2 sin θ2 at one curved refraction: f64 rounding of the refraction and of the
+/// normal rebuilt in the test.
+const SNELL_SINE_TOL: f64 = 1e-14;
+/// 1 − cosine between the planes of incidence and refraction: f64 rounding of two normalised
+/// cross products.
+const COPLANAR_TOL: f64 = 1e-12;
+/// Ratio of landing radius to aperture radius: f64 rounding of one division.
+const RELATIVE_RADIUS_TOL: f64 = 1e-12;
+/// Axis crossing of a ray 1e-3 mm off axis reflected by a sphere, from R/2 (mm): covers its
+/// residual spherical aberration and the rounding of extrapolating a nearly axial ray.
+const MIRROR_PARAXIAL_FOCUS_TOL_MM: f64 = 1e-4;
+/// Landing height of the f32 batch against the f64 one (mm): f32 rounding over the trace.
+const F32_LANDING_TOL_MM: f64 = 2e-4;
+/// Hits and directions of the conic and the asphere description of one paraboloid: f64
+/// rounding of two different intersection formulas.
+const SAME_SURFACE_TOL: f64 = 1e-10;
+/// Axis crossing of a paraboloid mirror from R/2 at any height (mm): f64 rounding of the trace
+/// and of the extrapolation.
+const PARABOLOID_FOCUS_TOL_MM: f64 = 1e-9;
+/// Distance of the Newton intersection from the asphere's sag (mm): its convergence in f64.
+const ASPHERE_SAG_TOL_MM: f64 = 1e-12;
+/// Snell's law about the asphere's normal taken by central difference (step 1e-6 mm): the
+/// difference's truncation and cancellation error.
+const NUMERICAL_NORMAL_SNELL_TOL: f64 = 1e-8;
+
 fn glass(nd: f64) -> Medium {
     Medium::Model { nd, vd: None }
 }
@@ -38,7 +78,11 @@ fn thin_lens_focal_length_matches_lensmaker() {
     let sys = thick_lens(r1, r2, 1e-6, n, 100.0);
     let p = analyse(&sys, LAMBDA).unwrap();
     let thin = 1.0 / ((n - 1.0) * (1.0 / r1 - 1.0 / r2));
-    assert!((p.efl_mm - thin).abs() < 1e-5, "{} vs {thin}", p.efl_mm);
+    assert!(
+        (p.efl_mm - thin).abs() < THIN_LENS_EFL_TOL_MM,
+        "{} vs {thin}",
+        p.efl_mm
+    );
 }
 
 #[test]
@@ -47,12 +91,24 @@ fn thick_lens_efl_and_bfl_match_closed_form() {
     let sys = thick_lens(r1, r2, t, n, 60.0);
     let p = analyse(&sys, LAMBDA).unwrap();
     let f = lensmaker(r1, r2, t, n);
-    assert!((p.efl_mm - f).abs() < 1e-9, "EFL {} vs {f}", p.efl_mm);
+    assert!(
+        (p.efl_mm - f).abs() < THICK_LENS_TOL_MM,
+        "EFL {} vs {f}",
+        p.efl_mm
+    );
     // Principal plane H′ lies −f (n−1) t / (n R1) from the rear vertex.
     let bfl = f - f * (n - 1.0) * t / (n * r1);
-    assert!((p.bfl_mm - bfl).abs() < 1e-9, "BFL {} vs {bfl}", p.bfl_mm);
+    assert!(
+        (p.bfl_mm - bfl).abs() < THICK_LENS_TOL_MM,
+        "BFL {} vs {bfl}",
+        p.bfl_mm
+    );
     let ffl = f + f * (n - 1.0) * t / (n * r2);
-    assert!((p.ffl_mm - ffl).abs() < 1e-9, "FFL {} vs {ffl}", p.ffl_mm);
+    assert!(
+        (p.ffl_mm - ffl).abs() < THICK_LENS_TOL_MM,
+        "FFL {} vs {ffl}",
+        p.ffl_mm
+    );
 }
 
 #[test]
@@ -75,8 +131,12 @@ fn ball_lens_efl_is_nd_over_two_n_minus_one() {
     sys.surfaces[2].thickness = 10.0;
     let p = analyse(&sys, LAMBDA).unwrap();
     let want = n * r / (2.0 * (n - 1.0));
-    assert!((p.efl_mm - want).abs() < 1e-12, "{} vs {want}", p.efl_mm);
-    assert!((p.bfl_mm - (want - r)).abs() < 1e-12);
+    assert!(
+        (p.efl_mm - want).abs() < PARAXIAL_TOL_MM,
+        "{} vs {want}",
+        p.efl_mm
+    );
+    assert!((p.bfl_mm - (want - r)).abs() < PARAXIAL_TOL_MM);
 }
 
 #[test]
@@ -95,11 +155,14 @@ fn plane_parallel_plate_shifts_focus_by_t_times_one_minus_one_over_n() {
         .insert(4, Surface::spherical(0.0, 50.0, Medium::Air, 15.0));
     let a = analyse(&lens, LAMBDA).unwrap();
     let b = analyse(&with_plate, LAMBDA).unwrap();
-    assert!((a.efl_mm - b.efl_mm).abs() < 1e-12, "a plate has no power");
+    assert!(
+        (a.efl_mm - b.efl_mm).abs() < PARAXIAL_TOL_MM,
+        "a plate has no power"
+    );
     // Focus position from the lens's rear vertex.
     let focus_a = a.bfl_mm;
     let focus_b = 5.0 + t + b.bfl_mm;
-    assert!((focus_b - focus_a - t * (1.0 - 1.0 / n)).abs() < 1e-12);
+    assert!((focus_b - focus_a - t * (1.0 - 1.0 / n)).abs() < PARAXIAL_TOL_MM);
     // And the real tracer agrees: a paraxial ray through the plate lands at that focus.
     let seq = Sequence::forward(&with_plate, LAMBDA);
     let mut sys_focus = with_plate.clone();
@@ -109,7 +172,7 @@ fn plane_parallel_plate_shifts_focus_by_t_times_one_minus_one_over_n() {
     let r = seq_f.trace(&Ray::collimated(0.0, 0.0, 1e-4));
     assert_eq!(r.fate, Fate::Sensor);
     assert!(
-        r.ray.origin.y.abs() < 1e-9,
+        r.ray.origin.y.abs() < PARAXIAL_FOCUS_HEIGHT_MM,
         "paraxial ray misses focus: {}",
         r.ray.origin.y
     );
@@ -132,11 +195,11 @@ fn snell_law_at_a_flat_interface() {
         let r = seq.trace(&Ray::collimated(deg.to_radians(), 0.0, 0.0));
         let want = deg.to_radians().sin() / 1.5;
         assert!(
-            (r.ray.dir.y - want).abs() < 1e-15,
+            (r.ray.dir.y - want).abs() < UNIT_DIRECTION_TOL,
             "{deg}°: {} vs {want}",
             r.ray.dir.y
         );
-        assert!((r.ray.dir.length() - 1.0).abs() < 1e-15);
+        assert!((r.ray.dir.length() - 1.0).abs() < UNIT_DIRECTION_TOL);
     }
 }
 
@@ -161,12 +224,12 @@ fn snell_law_at_a_curved_interface_is_exact() {
     let d_out = h.direction;
     let sin_in = d_in.cross(normal).length();
     let sin_out = d_out.cross(normal).length();
-    assert!((1.0 * sin_in - 1.7 * sin_out).abs() < 1e-14);
+    assert!((1.0 * sin_in - 1.7 * sin_out).abs() < SNELL_SINE_TOL);
     assert!(
         d_in.cross(normal)
             .normalize()
             .dot(d_out.cross(normal).normalize())
-            > 1.0 - 1e-12
+            > 1.0 - COPLANAR_TOL
     );
 }
 
@@ -213,7 +276,7 @@ fn vignetted_rays_still_report_their_landing_point() {
     let r = seq.trace(&Ray::collimated(0.0, 0.0, 7.0)); // stop radius 5
     assert_eq!(r.fate, Fate::Vignetted { surface: 0 });
     assert!(r.completed);
-    assert!((r.max_relative_radius - 7.0 / 5.0).abs() < 1e-12);
+    assert!((r.max_relative_radius - 7.0 / 5.0).abs() < RELATIVE_RADIUS_TOL);
 }
 
 #[test]
@@ -246,7 +309,10 @@ fn reflection_off_a_concave_mirror_focuses_at_half_the_radius() {
     // Where it crosses the axis: z = z_hit − y / (dy/dz).
     let t = -r.ray.origin.y / r.ray.dir.y;
     let z_cross = r.ray.origin.z + t * r.ray.dir.z;
-    assert!((z_cross + 100.0).abs() < 1e-4, "focus at {z_cross}");
+    assert!(
+        (z_cross + 100.0).abs() < MIRROR_PARAXIAL_FOCUS_TOL_MM,
+        "focus at {z_cross}"
+    );
 }
 
 #[test]
@@ -282,7 +348,7 @@ fn batched_f64_matches_scalar_exactly_and_f32_closely() {
             assert_eq!(f32fate, s.fate, "ray {i}");
         }
         assert!(
-            (p32[1] as f64 - p[1]).abs() < 2e-4,
+            (p32[1] as f64 - p[1]).abs() < F32_LANDING_TOL_MM,
             "ray {i}: {} vs {}",
             p32[1],
             p[1]
@@ -322,12 +388,12 @@ fn conic_and_asphere_descriptions_of_a_paraboloid_agree() {
         assert_eq!(ra.fate, rb.fate);
         for (x, y) in ha.iter().zip(&hb) {
             assert!(
-                (x.position - y.position).length() < 1e-10,
+                (x.position - y.position).length() < SAME_SURFACE_TOL,
                 "{} vs {}",
                 x.position,
                 y.position
             );
-            assert!((x.direction - y.direction).length() < 1e-10);
+            assert!((x.direction - y.direction).length() < SAME_SURFACE_TOL);
         }
     }
 }
@@ -352,7 +418,10 @@ fn paraboloid_mirror_focuses_all_parallel_rays_at_half_the_radius() {
     };
     for h in [1.0, 10.0, 30.0, 55.0] {
         let z = crossing(&seq, h);
-        assert!((z + 100.0).abs() < 1e-9, "h = {h}: focus at {z}");
+        assert!(
+            (z + 100.0).abs() < PARABOLOID_FOCUS_TOL_MM,
+            "h = {h}: focus at {z}"
+        );
     }
     // The sphere of the same radius focuses its margin short of R/2.
     assert!((crossing(&sphere, 55.0) + 100.0).abs() > 1.0);
@@ -384,7 +453,7 @@ fn asphere_intersection_lies_on_the_surface() {
         let z_local = p.z - 2.0;
         let sag = s.sag(p.x.hypot(p.y)).unwrap();
         assert!(
-            (z_local - sag).abs() < 1e-12,
+            (z_local - sag).abs() < ASPHERE_SAG_TOL_MM,
             "off the surface by {}",
             z_local - sag
         );
@@ -394,6 +463,9 @@ fn asphere_intersection_lies_on_the_surface() {
         let slope = (s.sag(rr + e).unwrap() - s.sag(rr - e).unwrap()) / (2.0 * e);
         let n = DVec3::new(-slope * p.x / rr, -slope * p.y / rr, 1.0).normalize();
         let (din, dout) = (hits[0].direction, hits[1].direction);
-        assert!((din.cross(n).length() - 1.58 * dout.cross(n).length()).abs() < 1e-8);
+        assert!(
+            (din.cross(n).length() - 1.58 * dout.cross(n).length()).abs()
+                < NUMERICAL_NORMAL_SNELL_TOL
+        );
     }
 }

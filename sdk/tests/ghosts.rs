@@ -9,6 +9,20 @@ use flarebench_sdk::paraxial::stop_opening;
 use flarebench_sdk::trace::{InterfaceTableSet, Ray, RayBatch, Sequence};
 use flarebench_test_support::load_lens;
 
+/// Batched ghost weights from the interface tables against the scalar Fresnel throughput: the
+/// tables are interpolated linearly in cos θ over 256 entries; absolute part.
+const TABLE_WEIGHT_ABS_TOL: f64 = 1e-6;
+/// The relative part of the same bound.
+const TABLE_WEIGHT_REL_TOL: f64 = 1e-4;
+/// Asymmetry of an on-axis ghost's entrance rectangle, as a fraction of its size: the grid's
+/// sampling.
+const ON_AXIS_SYMMETRY_FRACTION: f64 = 0.05;
+/// Approximate against precise entrance bounds, as a fraction of the larger side: the traced
+/// rectangle has one grid cell of margin; paraxial optics ignores aberration.
+const APPROXIMATE_BOUNDS_FRACTION: f64 = 0.25;
+/// An interpolated energy share against the mean of its neighbours: f64 rounding.
+const INTERPOLATION_TOL: f64 = 1e-12;
+
 fn lens(stem: &str) -> LensSystem {
     load_lens(stem)
 }
@@ -51,7 +65,8 @@ fn batched_ghost_weights_match_the_scalar_throughput() {
             let w = b.packets()[i / 64].weight[i % 64];
             // Tables are interpolated linearly in cos θ over 256 entries.
             assert!(
-                (w - s.throughput).abs() <= 1e-6 + 1e-4 * s.throughput,
+                (w - s.throughput).abs()
+                    <= TABLE_WEIGHT_ABS_TOL + TABLE_WEIGHT_REL_TOL * s.throughput,
                 "{first}-{second} ray {i}: {w} vs {}",
                 s.throughput
             );
@@ -72,8 +87,14 @@ fn precise_bounds_hold_every_passing_ray_and_are_symmetric_on_axis() {
     let b = bounds::precise(&sys, path, &tables, 0.0, reference, &mut scratch)
         .expect("ghost 4-3 reaches the sensor");
     let e = b.entrance;
-    assert!((e.x0 + e.x1).abs() < 0.05 * e.width(), "{e:?}");
-    assert!((e.y0 + e.y1).abs() < 0.05 * e.height(), "{e:?}");
+    assert!(
+        (e.x0 + e.x1).abs() < ON_AXIS_SYMMETRY_FRACTION * e.width(),
+        "{e:?}"
+    );
+    assert!(
+        (e.y0 + e.y1).abs() < ON_AXIS_SYMMETRY_FRACTION * e.height(),
+        "{e:?}"
+    );
     assert!(
         b.energy_share > 0.0 && b.energy_share < 0.05,
         "{}",
@@ -150,7 +171,7 @@ fn approximate_bounds_are_close_to_precise_ones_near_the_axis() {
             continue;
         };
         // The traced rectangle has one grid cell of margin; paraxial optics ignores aberration.
-        let tol = 0.25 * p.entrance.width().max(p.entrance.height());
+        let tol = APPROXIMATE_BOUNDS_FRACTION * p.entrance.width().max(p.entrance.height());
         for (x, y) in [
             (p.entrance.x0, a.entrance.x0),
             (p.entrance.x1, a.entrance.x1),
@@ -181,7 +202,7 @@ fn bounds_tables_interpolate_and_refuse_other_lenses() {
     let (a, b) = (table.bounds[g][1].unwrap(), table.bounds[g][2].unwrap());
     let mid = table.lookup(g, 0.75).unwrap();
     assert_eq!(mid.entrance, a.entrance.union(&b.entrance));
-    assert!((mid.energy_share - 0.5 * (a.energy_share + b.energy_share)).abs() < 1e-12);
+    assert!((mid.energy_share - 0.5 * (a.energy_share + b.energy_share)).abs() < INTERPOLATION_TOL);
     assert_eq!(table.lookup(g, 1.0).unwrap(), b);
     assert!(table.lookup(g, 2.5).is_none());
     let text = serde_json::to_string(&table).unwrap();

@@ -9,6 +9,16 @@ use flarebench_sdk::paraxial;
 use flarebench_sdk::spectrum::LAMBDA_D_NM;
 use flarebench_sdk::{LensSystem, SurfaceKind};
 
+/// A library lens's EFL against its value quoted to 3 decimals (mm).
+const QUOTED_EFL_TOL_MM: f64 = 1e-3;
+/// Sensor of a pbrt lens against the paraxial focus (mm): the sensor distance as the lens file
+/// writes it, rounded.
+const FILE_FOCUS_TOL_MM: f64 = 1e-5;
+/// An entrance pupil diameter against the source's figure quoted to 3 decimals (mm).
+const QUOTED_EPD_TOL_MM: f64 = 2e-3;
+/// The fisheye's f-number against f/4: f64 rounding.
+const F_NUMBER_TOL: f64 = 1e-9;
+
 fn lenses_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../lenses")
 }
@@ -97,7 +107,11 @@ fn focal_lengths_agree_with_the_conversion_script() {
     for (stem, efl, stated) in cases {
         let s = load(stem);
         let p = paraxial::analyse(&s, LAMBDA_D_NM).unwrap();
-        assert!((p.efl_mm - efl).abs() < 1e-3, "{stem}: EFL {}", p.efl_mm);
+        assert!(
+            (p.efl_mm - efl).abs() < QUOTED_EFL_TOL_MM,
+            "{stem}: EFL {}",
+            p.efl_mm
+        );
         assert_eq!(s.stated_efl_mm, stated, "{stem}");
     }
 }
@@ -112,7 +126,7 @@ fn pbrt_lenses_have_the_sensor_at_the_paraxial_focus() {
     ] {
         let p = paraxial::analyse(&load(stem), LAMBDA_D_NM).unwrap();
         assert!(
-            p.focus_error_mm.abs() < 1e-5,
+            p.focus_error_mm.abs() < FILE_FOCUS_TOL_MM,
             "{stem}: {}",
             p.focus_error_mm
         );
@@ -123,11 +137,17 @@ fn pbrt_lenses_have_the_sensor_at_the_paraxial_focus() {
 fn stated_apertures_hold() {
     // The Cooke triplet's stop gives the file's entrance pupil, ENPD 8.333 mm.
     let p = paraxial::analyse(&load("cooke-triplet-25mm"), LAMBDA_D_NM).unwrap();
-    assert!((p.entrance_pupil_diameter_mm - 8.333).abs() < 2e-3, "{p:?}");
+    assert!(
+        (p.entrance_pupil_diameter_mm - 8.333).abs() < QUOTED_EPD_TOL_MM,
+        "{p:?}"
+    );
     // The Laikin lens's stop from the file gives its ENPD 0.36 in = 9.144 mm.
     let p = paraxial::analyse(&load("laikin-wide-angle-100deg"), LAMBDA_D_NM).unwrap();
-    assert!((p.entrance_pupil_diameter_mm - 9.144).abs() < 2e-3, "{p:?}");
+    assert!(
+        (p.entrance_pupil_diameter_mm - 9.144).abs() < QUOTED_EPD_TOL_MM,
+        "{p:?}"
+    );
     // The fisheye is f/4.
     let p = paraxial::analyse(&load("fisheye-10mm"), LAMBDA_D_NM).unwrap();
-    assert!((p.f_number - 4.0).abs() < 1e-9, "{p:?}");
+    assert!((p.f_number - 4.0).abs() < F_NUMBER_TOL, "{p:?}");
 }

@@ -76,6 +76,11 @@ fn the_files_element_indices_are_our_surface_indices_stop_and_sensor_counted() {
 /// uncut entries agree with our precise bounds to 2.1% at worst (ghost 8-7 on axis, −2.07%;
 /// the next 1.4%).
 const ENERGY_TOLERANCE: f64 = 0.03;
+/// A converted entrance rectangle against the file's figures times the front semi-diameter
+/// (mm): f64 rounding of the conversion.
+const CONVERTED_RECT_TOL_MM: f64 = 1e-9;
+/// An interpolated energy share against the mean of its neighbours (relative): f64 rounding.
+const INTERPOLATION_REL_TOL: f64 = 1e-12;
 
 #[test]
 fn uncut_entries_carry_the_energy_our_own_bounds_find() {
@@ -136,7 +141,7 @@ fn one_known_ghost_converts_to_millimetres_on_our_entrance_plane() {
     assert_eq!(g, 2);
     let r = table.bounds[g][20].unwrap().entrance;
     let shift = 0.1 * 10f64.to_radians().tan();
-    let close = |a: f64, b: f64| (a - b).abs() < 1e-9;
+    let close = |a: f64, b: f64| (a - b).abs() < CONVERTED_RECT_TOL_MM;
     assert!(close(r.x0, -0.131416 * 14.5), "{r:?}");
     assert!(close(r.x1, (-0.131416 + 0.262831) * 14.5), "{r:?}");
     assert!(close(r.y0, -0.380148 * 14.5 + shift), "{r:?}");
@@ -184,7 +189,7 @@ fn lookup_interpolates_between_the_files_half_degree_steps() {
     assert_eq!(mid.sensor, lo.sensor.union(&hi.sensor));
     assert_eq!(mid.grid, lo.grid.max(hi.grid));
     let half = 0.5 * (lo.energy_share + hi.energy_share);
-    assert!((mid.energy_share - half).abs() < 1e-12 * half);
+    assert!((mid.energy_share - half).abs() < INTERPOLATION_REL_TOL * half);
     // The file ends at 90°; from 33.5° on it shows no ghost.
     assert_eq!(*table.angles_deg.last().unwrap(), 90.0);
     assert!((0..table.ghosts.len()).all(|g| table.lookup(g, 40.0).is_none()));

@@ -9,6 +9,17 @@ use proptest::prelude::*;
 
 const LAMBDA: f64 = 550.0;
 
+/// A reversed ray's return to its first hit (mm): f64 rounding over a forward and a backward
+/// trace through up to six surfaces.
+const REVERSED_POSITION_TOL_MM: f64 = 1e-9;
+/// A reversed ray's final direction against the start's, reversed: the same rounding on unit
+/// vectors.
+const REVERSED_DIRECTION_TOL: f64 = 1e-12;
+/// A traced direction's length against 1: f64 rounding of the refractions.
+const UNIT_DIRECTION_TOL: f64 = 1e-12;
+/// R + T against 1 for a bare interface: f64 rounding of one subtraction.
+const ENERGY_SUM_TOL: f64 = 1e-15;
+
 /// A random but sensible lens: 2–6 refracting surfaces, radii of either sign (or flat), glass
 /// indices 1.4–1.9, the stop first.
 fn lens() -> impl Strategy<Value = LensSystem> {
@@ -56,8 +67,8 @@ proptest! {
         let b = seq_b.trace(&reversed);
         prop_assert!(b.completed, "{:?}", b.fate);
         let first_hit = hits[0].position;
-        prop_assert!((b.ray.origin - first_hit).length() < 1e-9, "{} vs {}", b.ray.origin, first_hit);
-        prop_assert!((b.ray.dir + start.dir).length() < 1e-12);
+        prop_assert!((b.ray.origin - first_hit).length() < REVERSED_POSITION_TOL_MM, "{} vs {}", b.ray.origin, first_hit);
+        prop_assert!((b.ray.dir + start.dir).length() < REVERSED_DIRECTION_TOL);
     }
 
     /// Batched f64 tracing is the scalar tracer, ray for ray, bit for bit.
@@ -91,7 +102,7 @@ proptest! {
         let r = seq.trace(&Ray::collimated(field, 0.0, h));
         if r.completed {
             prop_assert!(r.ray.origin.is_finite() && r.ray.dir.is_finite());
-            prop_assert!((r.ray.dir.length() - 1.0).abs() < 1e-12);
+            prop_assert!((r.ray.dir.length() - 1.0).abs() < UNIT_DIRECTION_TOL);
         } else {
             // Stopped: the fate names the first event (a vignetting may precede the stop).
             prop_assert!(r.fate != Fate::Sensor, "{:?}", r.fate);
@@ -105,7 +116,7 @@ proptest! {
                                  nc in 1.2f64..2.4, d in 20.0f64..300.0, forward in any::<bool>()) {
         let r = fresnel::reflectance(n1, n2, cos_i);
         prop_assert!((0.0..=1.0).contains(&r.s) && (0.0..=1.0).contains(&r.p));
-        prop_assert!((r.unpolarised() + r.transmittance() - 1.0).abs() < 1e-15);
+        prop_assert!((r.unpolarised() + r.transmittance() - 1.0).abs() < ENERGY_SUM_TOL);
         let stack = Coating::Stack(vec![CoatingLayer { index: nc, thickness_nm: d }, CoatingLayer { index: 1.38, thickness_nm: 100.0 }]);
         let rc = stack.reflectance(n1, n2, cos_i, l, forward);
         prop_assert!((-1e-12..=1.0 + 1e-12).contains(&rc), "R = {}", rc);

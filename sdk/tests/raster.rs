@@ -18,6 +18,12 @@ const H: usize = 100;
 const REL_TOL: f64 = 1e-6;
 /// Absolute floor for tiny triangles (an area of 1e-6 px² rounds to ~1e-13 in a pixel).
 const ABS_TOL: f64 = 1e-9;
+/// A pixel's value over the shade it was drawn with (coverage at most 1): f32 rounding of the
+/// pixel's sum of areas.
+const PIXEL_REL_TOL: f32 = 1e-6;
+/// The clipped area of a triangle wholly inside the image against its closed form (px²): f64
+/// rounding.
+const AREA_TOL: f64 = 1e-9;
 
 fn shoelace(p: &[[f64; 2]]) -> f64 {
     let n = p.len();
@@ -138,10 +144,10 @@ proptest! {
         let want = f64::from(c) * area_inside(t);
         let [r, g, b] = img.sum();
         prop_assert!((r - want).abs() <= REL_TOL * want + ABS_TOL, "sum {r} vs {want} for {t:?}");
-        prop_assert!((g - 2.0 * r).abs() <= 1e-6 * r + ABS_TOL);
+        prop_assert!((g - 2.0 * r).abs() <= REL_TOL * r + ABS_TOL);
         prop_assert_eq!(b, 0.0);
-        prop_assert!(img.max() <= 2.0 * c * (1.0 + 1e-6) || img.max() == f32::NEG_INFINITY);
-        prop_assert!(img.pixels.iter().all(|p| p[0] >= 0.0 && p[0] <= c * (1.0 + 1e-6)));
+        prop_assert!(img.max() <= 2.0 * c * (1.0 + PIXEL_REL_TOL) || img.max() == f32::NEG_INFINITY);
+        prop_assert!(img.pixels.iter().all(|p| p[0] >= 0.0 && p[0] <= c * (1.0 + PIXEL_REL_TOL)));
     }
 
     /// Many triangles of every kind in one call: the sums add up.
@@ -170,7 +176,7 @@ proptest! {
 fn the_area_check_detects_a_missing_pixel() {
     let t = [[10.0, 10.0], [60.0, 10.0], [10.0, 60.0]];
     let want = area_inside(t);
-    assert!((want - 1250.0).abs() < 1e-9);
+    assert!((want - 1250.0).abs() < AREA_TOL);
     let r = render(&[t], 1.0).sum()[0] - 1.0;
     assert!((r - want).abs() > REL_TOL * want + ABS_TOL);
 }

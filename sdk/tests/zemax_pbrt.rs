@@ -155,7 +155,7 @@ fn every_pbrt_file_loads() {
         lens.system.validate().unwrap();
         // The film is at the paraxial focus (pbrt focuses it itself).
         let p = analyse(&lens.system, LAMBDA_D_NM).unwrap();
-        assert!(p.focus_error_mm.abs() < 1e-9, "{name}: {p:?}");
+        assert!(p.focus_error_mm.abs() < PBRT_FOCUS_TOL_MM, "{name}: {p:?}");
     }
     // Only the separation-before table needs a guess, and says so.
     assert!(load("pbrt", "dgauss.50mm.dat").warnings.is_empty());
@@ -169,6 +169,42 @@ fn every_pbrt_file_loads() {
 /// Both codes use refractiveindex.info's glass formulas: measured agreement is ~1e-12 mm.
 const SAME_GLASS_DATA_MM: f64 = 1e-6;
 
+/// pbrt's film against the paraxial focus (mm): f64 rounding of where the loader focuses it.
+const PBRT_FOCUS_TOL_MM: f64 = 1e-9;
+
+/// EFL against a source CSV header written by its own converter at the d line with nd rounded
+/// to 5 decimals (mm).
+const CSV_HEADER_EFL_TOL_MM: f64 = 5e-4;
+
+/// EFL against a catalogue's nominal focal length (mm).
+const CATALOGUE_EFL_TOL_MM: f64 = 0.01;
+
+/// EFL against R1 / (n − 1) with the maker's published nd, 5 decimals: ±5e-6 in n is ±2e-4 mm.
+const PUBLISHED_ND_EFL_TOL_MM: f64 = 2e-4;
+
+/// EFL with LITHOSIL-Q for SILICA against optiland's Malitson silica at 248 nm (mm): measured
+/// 0.183 mm shorter through 21 silica elements.
+const SILICA_FORMULA_EFL_TOL_MM: f64 = 0.25;
+
+/// EFL against a pbrt table's header, stated to 3 decimals (mm).
+const PBRT_HEADER_EFL_TOL_MM: f64 = 1e-3;
+
+/// EFL of the 100 mm table against twice the 50 mm table's 3-decimal header (mm).
+const SCALED_PBRT_HEADER_EFL_TOL_MM: f64 = 2e-3;
+
+/// Curvature of the 50 mm pbrt table against twice the 100 mm one's (1/mm): f64 rounding.
+const HALF_SCALE_CURVATURE_TOL: f64 = 1e-15;
+/// Thickness of the 100 mm pbrt table against twice the 50 mm one's (mm): f64 rounding.
+const HALF_SCALE_THICKNESS_TOL_MM: f64 = 1e-9;
+/// Semi-diameter of the 100 mm pbrt table against twice the 50 mm one's (mm): f64 rounding.
+const HALF_SCALE_SEMI_DIAMETER_TOL_MM: f64 = 1e-12;
+
+/// The library lens's sensor distance, which convert.py rounds to 1e-6 mm: half of that.
+const SENSOR_DISTANCE_ROUNDING_MM: f64 = 5e-7;
+
+/// Entrance pupil diameter against optiland's (mm): f64 rounding.
+const EPD_TOL_MM: f64 = 1e-9;
+
 #[test]
 fn cooke_triplet_efl_matches_optiland_and_its_source_csv() {
     let s = load("zemax", "ol_lens1.zmx").system;
@@ -176,7 +212,7 @@ fn cooke_triplet_efl_matches_optiland_and_its_source_csv() {
     assert!((efl(&s, 587.5618) - 24.990670494950276).abs() < SAME_GLASS_DATA_MM);
     // lenses/sources/csv/zmx_optiland_cooke_triplet_lens1.csv header: "EFL=24.9908 mm"
     // (its own converter, d line, nd rounded to 5 decimals: allow 5e-4 mm).
-    assert!((efl(&s, LAMBDA_D_NM) - 24.9908).abs() < 5e-4);
+    assert!((efl(&s, LAMBDA_D_NM) - 24.9908).abs() < CSV_HEADER_EFL_TOL_MM);
 }
 
 #[test]
@@ -188,7 +224,7 @@ fn laikin_wide_angle_efl_matches_optiland_and_its_source_csv() {
     assert!((efl(&s, 587.0) - optiland_mm).abs() < SAME_GLASS_DATA_MM);
     // lenses-csv/zmx_optiland_laikin_100deg_wide_angle.csv header: "EFL=18.5442 mm" at the
     // d line, nd rounded to 5 decimals.
-    assert!((efl(&s, LAMBDA_D_NM) - 18.5442).abs() < 5e-4);
+    assert!((efl(&s, LAMBDA_D_NM) - 18.5442).abs() < CSV_HEADER_EFL_TOL_MM);
     // The CLAP on flat surface 10 of the file (0.45 in) is its clear semi-diameter.
     assert_eq!(s.surfaces[9].semi_diameter, 0.45 * 25.4);
 }
@@ -197,21 +233,24 @@ fn laikin_wide_angle_efl_matches_optiland_and_its_source_csv() {
 fn edmund_asphere_efl_matches_its_catalogue_and_the_plano_convex_formula() {
     let s = load("zemax", "ol_lens2.zmx").system;
     // Edmund Optics #47-728, "15mm Dia. x 22.5mm FL" (the file's DBDT record: 2.250E+01).
-    assert!((efl(&s, 587.6) - 22.5).abs() < 0.01);
+    assert!((efl(&s, 587.6) - 22.5).abs() < CATALOGUE_EFL_TOL_MM);
     // optiland: 22.499368205385874 mm at 0.5876 µm.
     assert!((efl(&s, 587.6) - 22.499368205385874).abs() < SAME_GLASS_DATA_MM);
     // Plano-convex with a flat back: EFL = R1 / (n − 1) whatever the thickness (the conic and
     // aspheric terms have no paraxial power). R1 = 1/CURV = 1/0.07544322897019992 mm; Ohara's
     // published nd of L-BAL35 is 1.58913 (5 decimals: ±5e-6 in n, ±2e-4 mm in EFL).
     let closed = (1.0 / 0.07544322897019992) / (1.58913 - 1.0);
-    assert!((efl(&s, LAMBDA_D_NM) - closed).abs() < 2e-4, "{closed}");
+    assert!(
+        (efl(&s, LAMBDA_D_NM) - closed).abs() < PUBLISHED_ND_EFL_TOL_MM,
+        "{closed}"
+    );
 }
 
 #[test]
 fn thorlabs_asphere_efl_matches_its_catalogue() {
     let s = load("zemax", "ol_lens_thorlabs_iso_8859_1.zmx").system;
     // Thorlabs AL1815-C: "f=15 mm" at its design wavelength 780 nm (the file's NAME, PWAV).
-    assert!((efl(&s, 780.0) - 15.0).abs() < 0.01);
+    assert!((efl(&s, 780.0) - 15.0).abs() < CATALOGUE_EFL_TOL_MM);
     // optiland: 14.995572148674018 mm at 0.78 µm.
     assert!((efl(&s, 780.0) - 14.995572148674018).abs() < SAME_GLASS_DATA_MM);
     // The ISO-8859-1 "Ø" of the NAME survives decoding.
@@ -249,7 +288,7 @@ fn lithography_lens_efl_matches_optiland_up_to_the_silica_formula() {
     // We read SILICA as SCHOTT:LITHOSIL-Q, whose formula (valid from 250 nm) gives n 2.2e-5
     // lower than Malitson's at 248 nm; through 21 silica elements that shortens the EFL by
     // 0.183 mm (measured: 493.837 mm). Allow 0.25 mm.
-    assert!((efl(&s, 248.0) - 494.02032877703374).abs() < 0.25);
+    assert!((efl(&s, 248.0) - 494.02032877703374).abs() < SILICA_FORMULA_EFL_TOL_MM);
 }
 
 #[test]
@@ -261,12 +300,15 @@ fn pbrt_efls_match_their_tables_headers() {
         ("fisheye.10mm.dat", 9.991),
     ] {
         let s = load("pbrt", name).system;
-        assert!((efl(&s, LAMBDA_D_NM) - stated).abs() < 1e-3, "{name}");
+        assert!(
+            (efl(&s, LAMBDA_D_NM) - stated).abs() < PBRT_HEADER_EFL_TOL_MM,
+            "{name}"
+        );
     }
     // dgauss.dat is the same design at 100 mm ("Scaled to 50 mm from 100 mm" in the 50 mm
     // table's header): every length is exactly twice, so its EFL is 2 × 50.358.
     let s = load("pbrt", "dgauss.dat").system;
-    assert!((efl(&s, LAMBDA_D_NM) - 2.0 * 50.358).abs() < 2e-3);
+    assert!((efl(&s, LAMBDA_D_NM) - 2.0 * 50.358).abs() < SCALED_PBRT_HEADER_EFL_TOL_MM);
 }
 
 #[test]
@@ -276,12 +318,18 @@ fn both_pbrt_conventions_give_the_same_double_gauss() {
     assert_eq!(half.surfaces.len(), full.surfaces.len());
     for (i, (a, b)) in half.surfaces.iter().zip(&full.surfaces).enumerate() {
         assert_eq!(a.kind, b.kind, "{i}");
-        assert!((a.curvature - 2.0 * b.curvature).abs() <= 1e-15, "{i}");
-        assert!((2.0 * a.thickness - b.thickness).abs() <= 1e-9, "{i}");
+        assert!(
+            (a.curvature - 2.0 * b.curvature).abs() <= HALF_SCALE_CURVATURE_TOL,
+            "{i}"
+        );
+        assert!(
+            (2.0 * a.thickness - b.thickness).abs() <= HALF_SCALE_THICKNESS_TOL_MM,
+            "{i}"
+        );
         assert_eq!(a.medium, b.medium, "{i}");
         if a.kind != SurfaceKind::Sensor {
             assert!(
-                (2.0 * a.semi_diameter - b.semi_diameter).abs() <= 1e-12,
+                (2.0 * a.semi_diameter - b.semi_diameter).abs() <= HALF_SCALE_SEMI_DIAMETER_TOL_MM,
                 "{i}"
             );
         }
@@ -310,7 +358,11 @@ fn the_pbrt_double_gauss_is_the_library_lens() {
             // half diagonal, 21.633 mm.
             assert_eq!(a.semi_diameter, b.semi_diameter, "{i}");
         }
-        let tol = if i == last { 5e-7 } else { 0.0 };
+        let tol = if i == last {
+            SENSOR_DISTANCE_ROUNDING_MM
+        } else {
+            0.0
+        };
         assert!((a.thickness - b.thickness).abs() <= tol, "{i}");
     }
     assert_eq!(ours.stated_efl_mm, Some(50.0));
@@ -338,7 +390,7 @@ fn zemax_configurations_match_optiland() {
             "config {config}"
         );
         assert!(
-            (p.entrance_pupil_diameter_mm - epd).abs() < 1e-9,
+            (p.entrance_pupil_diameter_mm - epd).abs() < EPD_TOL_MM,
             "config {config}"
         );
     }

@@ -5,6 +5,16 @@ mod common;
 use common::{flarebench, json, temp_dir};
 use std::path::PathBuf;
 
+/// Paraxial figures from `info` against values quoted to 3 or 4 decimals (mm).
+const QUOTED_FIGURE_TOL_MM: f64 = 1e-3;
+/// The f-number against the stop's f/22: f64 rounding.
+const F_NUMBER_TOL: f64 = 1e-9;
+/// x of a meridional ray at the sensor (mm): f64 rounding.
+const MERIDIONAL_X_TOL_MM: f64 = 1e-12;
+/// A ray traced at azimuth 90° against the one at 0° turned (mm): f64 rounding of the two
+/// traces.
+const ROTATION_TOL_MM: f64 = 1e-9;
+
 /// Writes `text` to `name` in a fresh directory; the directory goes when the `TempDir` does.
 fn temp_file(name: &str, text: &str) -> (tempfile::TempDir, PathBuf) {
     let dir = temp_dir("cli");
@@ -17,7 +27,7 @@ fn temp_file(name: &str, text: &str) -> (tempfile::TempDir, PathBuf) {
 fn info_json_gives_paraxial_data_and_surfaces() {
     let v = json(&["info", "heliar-tronnier", "--json"]);
     assert!(
-        (v["efl_mm"].as_f64().unwrap() - 99.2358).abs() < 1e-3,
+        (v["efl_mm"].as_f64().unwrap() - 99.2358).abs() < QUOTED_FIGURE_TOL_MM,
         "{v}"
     );
     for key in [
@@ -29,10 +39,10 @@ fn info_json_gives_paraxial_data_and_surfaces() {
         assert!(v[key].as_f64().is_some(), "missing {key}");
     }
     assert!(
-        (v["f_number"].as_f64().unwrap() - 22.0).abs() < 1e-9,
+        (v["f_number"].as_f64().unwrap() - 22.0).abs() < F_NUMBER_TOL,
         "the stop closes to f/22"
     );
-    assert!((v["total_track_mm"].as_f64().unwrap() - 114.077).abs() < 1e-3);
+    assert!((v["total_track_mm"].as_f64().unwrap() - 114.077).abs() < QUOTED_FIGURE_TOL_MM);
     let surfaces = v["surfaces"].as_array().unwrap();
     assert_eq!(surfaces.len(), 10);
     assert_eq!(surfaces[5]["kind"], "stop");
@@ -80,7 +90,7 @@ fn trace_reaches_the_sensor_on_axis() {
     assert!(v["fate_surface"].is_null());
     let hits = v["hits"].as_array().unwrap();
     assert_eq!(hits.len(), 10);
-    assert!(v["x_mm"].as_f64().unwrap().abs() < 1e-12);
+    assert!(v["x_mm"].as_f64().unwrap().abs() < MERIDIONAL_X_TOL_MM);
     // A ray 1 mm off axis crosses near focus: the sensor is 1.54 mm behind the paraxial focus,
     // so it lands at about −1 · 1.54/81.3 mm (plus spherical aberration), i.e. near −0.02 mm.
     let y = v["y_mm"].as_f64().unwrap();
@@ -128,7 +138,7 @@ fn trace_azimuth_rotates_the_landing_point() {
     ]);
     let (ya, xb) = (a["y_mm"].as_f64().unwrap(), b["x_mm"].as_f64().unwrap());
     assert!(
-        (ya + xb).abs() < 1e-9,
+        (ya + xb).abs() < ROTATION_TOL_MM,
         "rotation by 90° maps y to −x: {ya} vs {xb}"
     );
 }
@@ -140,7 +150,7 @@ fn a_lens_path_works_like_a_name() {
         "/../lenses/cooke-triplet-25mm.xml"
     );
     let v = json(&["info", path, "--json"]);
-    assert!((v["efl_mm"].as_f64().unwrap() - 24.9907).abs() < 1e-3);
+    assert!((v["efl_mm"].as_f64().unwrap() - 24.9907).abs() < QUOTED_FIGURE_TOL_MM);
 }
 
 #[test]

@@ -195,6 +195,13 @@ fn compare_refuses_an_unknown_plugin_or_parameter_clearly() {
 /// 1% in `algorithms/starburst-fraunhofer/tests/plugin.rs`).
 const SAME_STARBURST_TOL: f64 = 1e-6;
 
+/// A ghost plugin's image against the library's, relative RMSE and energy: rayon's reduction
+/// order may differ between runs.
+const SAME_GHOSTS_TOL: f64 = 1e-5;
+/// Relative RMSE a lost mask or colour must at least make, for the comparison to be able to
+/// fail.
+const OTHER_IMAGE_MIN_RMSE: f64 = 1e-2;
+
 #[test]
 fn the_starburst_plugin_renders_what_render_composes() {
     use flarebench::compose::{StarburstSetup, add_starbursts};
@@ -363,7 +370,7 @@ fn the_ghost_plugin_renders_what_the_library_renders() {
         assert_eq!(stats.items_drawn as usize, drawn);
         let c = buffer.compare(&expected).unwrap();
         assert!(
-            c.relative_rmse < 1e-5 && c.energy_error.abs() < 1e-5,
+            c.relative_rmse < SAME_GHOSTS_TOL && c.energy_error.abs() < SAME_GHOSTS_TOL,
             "{c:?}"
         );
     }
@@ -435,7 +442,7 @@ fn the_ghost_plugin_renders_a_mask_aperture_and_an_rgb_light_as_the_library_does
     assert_eq!(out.items_drawn as usize, drawn);
     let c = out.image.compare(&expected).unwrap();
     assert!(
-        c.relative_rmse < 1e-5 && c.energy_error.abs() < 1e-5,
+        c.relative_rmse < SAME_GHOSTS_TOL && c.energy_error.abs() < SAME_GHOSTS_TOL,
         "{c:?}"
     );
 
@@ -444,14 +451,14 @@ fn the_ghost_plugin_renders_a_mask_aperture_and_an_rgb_light_as_the_library_does
     let (circle, _) =
         ghost_raytrace::ghosts::render(&sys, &Aperture::Circular, frame, &plans).unwrap();
     let c = circle.compare(&expected).unwrap();
-    assert!(c.relative_rmse > 1e-2, "{c:?}");
+    assert!(c.relative_rmse > OTHER_IMAGE_MIN_RMSE, "{c:?}");
     let mut white = lights.clone();
     white[0].spectrum = LightSpectrum::D65;
     let plans_white = plan::plan(&sys, &white, &frame, &opts).unwrap();
     let (white_img, _) =
         ghost_raytrace::ghosts::render(&sys, &aperture, frame, &plans_white).unwrap();
     let c = white_img.compare(&expected).unwrap();
-    assert!(c.relative_rmse > 1e-2, "{c:?}");
+    assert!(c.relative_rmse > OTHER_IMAGE_MIN_RMSE, "{c:?}");
 }
 
 #[test]

@@ -14,6 +14,35 @@ use flarebench_test_support::load_lens;
 
 const LENS: &str = "double-gauss-50mm";
 
+/// A starburst's position against where its light is, projected or found (pixels).
+const POSITION_TOL_PX: f64 = 1e-3;
+
+/// Energy a starburst carries against its light's flux: the pattern's own energy error (white
+/// light's luminance sum is held to 1% in `sdk/tests/starburst.rs`).
+const STARBURST_ENERGY_TOL: f64 = 0.01;
+
+/// Luminance added to a background, summed from the f32 EXR, against the reported addition.
+const ADDED_LUMINANCE_TOL: f64 = 1e-3;
+
+/// Half floats keep 11 significant bits: relative error ≤ 2⁻¹¹ = 4.88e-4.
+const HALF_FLOAT_REL_TOL: f32 = 4.9e-4;
+/// Half floats' absolute error near zero: the subnormal spacing 2⁻²⁴ = 5.96e-8.
+const HALF_FLOAT_ABS_TOL: f32 = 6e-8;
+
+/// A painted light's direction recovered by `apply` (degrees): the splat puts its centroid on
+/// the light up to f32 rounding.
+const DIRECTION_TOL_DEG: f64 = 1e-3;
+
+/// A painted light's energy recovered by `apply` (relative): f32 rounding of the splat.
+const LIGHT_ENERGY_REL_TOL: f64 = 1e-5;
+
+/// Share of the lights' energy the whole flare must add at least: the starbursts carry it to
+/// `STARBURST_ENERGY_TOL`.
+const FLARE_ENERGY_FLOOR: f64 = 0.99;
+
+/// Centroid of a symmetric 3×3 clipped light against its middle pixel's centre: f64 rounding.
+const CENTROID_TOL_PX: f64 = 1e-9;
+
 fn lens() -> flarebench_sdk::LensSystem {
     load_lens(LENS)
 }
@@ -68,17 +97,19 @@ fn render_adds_the_starburst_at_the_chief_ray_with_the_lights_flux() {
         .map(|x| x.as_f64().unwrap())
         .collect();
     let want = light_pixel(&frame(320, 180), 6.0, 40.0);
-    assert!((pos[0] - want[0]).abs() < 1e-3 && (pos[1] - want[1]).abs() < 1e-3);
+    assert!(
+        (pos[0] - want[0]).abs() < POSITION_TOL_PX && (pos[1] - want[1]).abs() < POSITION_TOL_PX
+    );
     // Wholly in the frame: the image carries the light's flux (intensity 2 × the direct
     // image's flux), and nothing else (no ghosts).
     let flux = sb["flux"].as_f64().unwrap();
     let img = read_exr(&out).unwrap();
     assert!(
-        (img.luminance_sum() / flux - 1.0).abs() < 0.01,
+        (img.luminance_sum() / flux - 1.0).abs() < STARBURST_ENERGY_TOL,
         "{} vs {flux}",
         img.luminance_sum()
     );
-    assert!((sb["added"].as_f64().unwrap() / flux - 1.0).abs() < 0.01);
+    assert!((sb["added"].as_f64().unwrap() / flux - 1.0).abs() < STARBURST_ENERGY_TOL);
     assert!(v["lights"].as_array().unwrap().is_empty());
     // The brightest pixel holds the light's image.
     let (k, _) = img
@@ -174,7 +205,10 @@ fn a_background_keeps_its_values_where_the_flare_is_zero() {
     assert!(changed > 0 && changed < 400, "{changed} changed");
     assert!(same > w * h - 400);
     let flux = v["starbursts"][0]["added"].as_f64().unwrap();
-    assert!((added / flux - 1.0).abs() < 1e-3, "{added} vs {flux}");
+    assert!(
+        (added / flux - 1.0).abs() < ADDED_LUMINANCE_TOL,
+        "{added} vs {flux}"
+    );
 
     // A PNG background: written with exposure 0 and the clamp curve, so 8-bit values
     // survive decoding and re-encoding wherever the flare is zero.
@@ -247,7 +281,7 @@ fn half_float_exr_is_the_float_image_rounded() {
         for c in 0..3 {
             // Half floats keep 11 significant bits: relative error ≤ 2⁻¹¹ (subnormals aside).
             assert!(
-                (x[c] - y[c]).abs() <= x[c].abs() * 4.9e-4 + 6e-8,
+                (x[c] - y[c]).abs() <= x[c].abs() * HALF_FLOAT_REL_TOL + HALF_FLOAT_ABS_TOL,
                 "{x:?} {y:?}"
             );
         }
@@ -309,12 +343,12 @@ fn apply_finds_synthetic_lights_and_recovers_their_directions() {
     for (l, &(t, p, e)) in lights.iter().zip(&known) {
         let theta = l["theta_deg"].as_f64().unwrap();
         let phi = l["phi_deg"].as_f64().unwrap();
-        assert!((theta - t).abs() < 1e-3, "θ {theta} vs {t}");
+        assert!((theta - t).abs() < DIRECTION_TOL_DEG, "θ {theta} vs {t}");
         let dphi = (phi - p).rem_euclid(360.0);
-        assert!(dphi.min(360.0 - dphi) < 1e-3, "φ {phi} vs {p}");
+        assert!(dphi.min(360.0 - dphi) < DIRECTION_TOL_DEG, "φ {phi} vs {p}");
         let energy = l["energy"].as_f64().unwrap();
         assert!(
-            (energy / f64::from(e) - 1.0).abs() < 1e-5,
+            (energy / f64::from(e) - 1.0).abs() < LIGHT_ENERGY_REL_TOL,
             "{energy} vs {e}"
         );
     }
@@ -322,11 +356,14 @@ fn apply_finds_synthetic_lights_and_recovers_their_directions() {
     for (sb, l) in v["starbursts"].as_array().unwrap().iter().zip(lights) {
         let added = sb["added"].as_f64().unwrap() + sb["outside"].as_f64().unwrap();
         let energy = l["energy"].as_f64().unwrap();
-        assert!((added / energy - 1.0).abs() < 0.01, "{added} vs {energy}");
+        assert!(
+            (added / energy - 1.0).abs() < STARBURST_ENERGY_TOL,
+            "{added} vs {energy}"
+        );
         for k in 0..2 {
             let a = sb["position_px"][k].as_f64().unwrap();
             let b = l["centroid_px"][k].as_f64().unwrap();
-            assert!((a - b).abs() < 1e-3, "{a} vs {b}");
+            assert!((a - b).abs() < POSITION_TOL_PX, "{a} vs {b}");
         }
     }
     assert!(v["ghosts_traced"].as_u64().unwrap() > 0);
@@ -341,7 +378,7 @@ fn apply_finds_synthetic_lights_and_recovers_their_directions() {
         added += lum(*o) - lum(*i);
     }
     let total: f64 = known.iter().map(|k| f64::from(k.2)).sum();
-    assert!(added > 0.99 * total, "{added} vs {total}");
+    assert!(added > FLARE_ENERGY_FLOOR * total, "{added} vs {total}");
 }
 
 #[test]
@@ -383,13 +420,16 @@ fn apply_on_a_clipped_png_and_with_nothing_bright() {
     assert_eq!(l["pixels"].as_u64(), Some(9));
     assert_eq!(v["hdr"].as_bool(), Some(false));
     // The centroid is the middle of pixel (ci, cj).
-    assert!((l["centroid_px"][0].as_f64().unwrap() - (ci as f64 + 0.5)).abs() < 1e-9);
+    assert!((l["centroid_px"][0].as_f64().unwrap() - (ci as f64 + 0.5)).abs() < CENTROID_TOL_PX);
     // Energy: 9 clipped pixels of linear 1 × gain 50. At f/2 the pattern reaches about one
     // pixel (256 texels × 0.78 µm × 2 / 2 = 0.2 mm, pixels of 0.18 mm), so it lands on the
     // already clipped light: the 8-bit output can only stay or grow.
     let sb = &v["starbursts"][0];
     let added = sb["added"].as_f64().unwrap() + sb["outside"].as_f64().unwrap();
-    assert!((added / 450.0 - 1.0).abs() < 0.01, "{added}");
+    assert!(
+        (added / 450.0 - 1.0).abs() < STARBURST_ENERGY_TOL,
+        "{added}"
+    );
     let back = image::open(&out).unwrap().to_rgb8().into_raw();
     assert!(back.iter().zip(&raw).all(|(b, a)| b >= a));
 

@@ -16,6 +16,10 @@ use ghost_raytrace::ghosts;
 use ghost_raytrace::plan::{self, BOUNDS_LAMBDA_NM, DropReason, PlanOptions};
 use ghost_raytrace::scene::{LightSpec, Quality};
 
+/// Four-reflection energy share planned from a table that interpolates its own bounds against
+/// bounds traced at the light's angle (relative): the energies may differ a little.
+const INTERPOLATED_SHARE_TOL: f64 = 0.1;
+
 fn lens(stem: &str) -> LensSystem {
     load_lens(stem)
 }
@@ -169,7 +173,10 @@ fn a_table_without_four_reflection_ghosts_gives_the_same_plan_as_no_table() {
     );
     let lit = |s: &plan::FourReflectionSummary| s.traced_energy_share + s.dropped_energy_share;
     assert!(lit(&sn) > 0.0);
-    assert!((lit(&s4) / lit(&sn) - 1.0).abs() < 0.1, "{s4:?} vs {sn:?}");
+    assert!(
+        (lit(&s4) / lit(&sn) - 1.0).abs() < INTERPOLATED_SHARE_TOL,
+        "{s4:?} vs {sn:?}"
+    );
 }
 
 /// The Nikon zoom has 36 785 four-reflection paths: at fast quality the traced bound leaves

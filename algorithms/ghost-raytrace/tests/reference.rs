@@ -17,6 +17,10 @@ use ghost_raytrace::reference::{
 };
 use ghost_raytrace::scene::LightSpec;
 
+/// Relative RMSE and energy change when the reference's rays or bands are doubled: under 0.1%
+/// (measured 8.3e-4 for the rays on the Heliar, 2.6e-4 for the bands of the Nikon's ghost).
+const CONVERGED_TOL: f64 = 1e-3;
+
 /// A bundled lens and a frame of `width × height` pixels across its film.
 fn lens_and_frame(stem: &str, width: usize, height: usize) -> (LensSystem, Frame) {
     let sys = load_lens(stem);
@@ -42,8 +46,16 @@ fn doubling_the_reference_rays_changes_the_image_by_under_a_thousandth() {
         c.relative_rmse, c.relative_l1, c.energy_error
     );
     assert!(base.sum().iter().all(|&v| v > 0.0), "the reference is lit");
-    assert!(c.relative_rmse < 1e-3, "relative RMSE {}", c.relative_rmse);
-    assert!(c.energy_error.abs() < 1e-3, "energy {}", c.energy_error);
+    assert!(
+        c.relative_rmse < CONVERGED_TOL,
+        "relative RMSE {}",
+        c.relative_rmse
+    );
+    assert!(
+        c.energy_error.abs() < CONVERGED_TOL,
+        "energy {}",
+        c.energy_error
+    );
 }
 
 /// The spectrum: the Nikon zoom's most dispersive ghost whose bands its dispersion sets (13-7
@@ -105,6 +117,14 @@ fn doubling_the_reference_bands_changes_a_dispersive_ghost_by_under_a_thousandth
         c.relative_rmse, c.energy_error
     );
     assert!(base.luminance_sum() > 0.0, "the ghost is lit");
-    assert!(c.relative_rmse < 1e-3, "relative RMSE {}", c.relative_rmse);
-    assert!(c.energy_error.abs() < 1e-3, "energy {}", c.energy_error);
+    assert!(
+        c.relative_rmse < CONVERGED_TOL,
+        "relative RMSE {}",
+        c.relative_rmse
+    );
+    assert!(
+        c.energy_error.abs() < CONVERGED_TOL,
+        "energy {}",
+        c.energy_error
+    );
 }
