@@ -20,6 +20,7 @@ use flarebench_sdk::ghost::context::{BandRef, GhostContext, GhostGrid, GhostLigh
 use flarebench_sdk::ghost::fringe::mesh_ghost_fringed;
 use flarebench_sdk::ghost::mesh::GhostMesh;
 use flarebench_sdk::ghost::render::{mesh_ghost, rasterize_ghost_mesh_into};
+use flarebench_sdk::ghost::sink::{FrameLevels, GhostSink};
 use flarebench_sdk::image::{
     Blend, CoarseGrid, HdrImage, RowSpans, SpannedLevel, row_spans, upsample_spans_into,
 };
@@ -131,6 +132,60 @@ pub fn render_into_reusing(
             len: out.len(),
         });
     }
+    let mut targets = Targets {
+        scratch,
+        grids: Vec::new(),
+        coarse: Vec::new(),
+        aperture,
+        out,
+        width: frame.width,
+        blend: if options.replace {
+            Blend::Replace
+        } else {
+            Blend::Add
+        },
+        spans: None,
+    };
+    let stats = draw_into(system, aperture, frame, plans, options, &mut targets)?;
+    // The coarse frames go back to the scratch with the spans their upsampling found.
+    let spans = targets.spans.take().unwrap_or_default();
+    let coarse = std::mem::take(&mut targets.coarse);
+    scratch_keep(targets.scratch, coarse, spans, frame);
+    Ok(stats)
+}
+
+/// Keeps `coarse` (with their lit `spans`) in `scratch`, and only what a frame of `frame`'s
+/// size can use again (factors 2 to 64, the largest a plan may ask for): a resized frame's
+/// are let go.
+fn scratch_keep(
+    scratch: &mut RenderScratch,
+    coarse: Vec<HdrImage>,
+    spans: Vec<RowSpans>,
+    frame: Frame,
+) {
+    scratch.coarse.extend(coarse.into_iter().zip(spans));
+    scratch.coarse.retain(|(img, _)| {
+        (1..=6).any(|k| {
+            let g = CoarseGrid::for_frame(frame.width, frame.height, 1 << k);
+            (g.width, g.height) == (img.width, img.height)
+        })
+    });
+}
+
+/// Makes every planned ghost's triangles and hands them to `sink`
+/// (`flarebench_sdk::ghost::sink`): the levels first (the coarse frames the plan's coarse
+/// factors ask for, then the full-resolution frame if some ghost is drawn there), then each
+/// level's meshes, in batches, in plan order. Returns, per light, each ghost's statistics in
+/// plan order. The CPU renderer ([`render_into_reusing`]) and the GPU backend both draw
+/// through this.
+pub fn draw_into(
+    system: &LensSystem,
+    aperture: &Aperture,
+    frame: Frame,
+    plans: &[LightPlan],
+    options: RenderOptions,
+    sink: &mut dyn GhostSink,
+) -> Result<Vec<Vec<GhostStats>>, GhostRenderError> {
     let p = analyse(system, LAMBDA_D_NM)?;
     let mut jobs: Vec<(usize, usize, usize)> = plans
         .iter()
@@ -163,36 +218,13 @@ pub fn render_into_reusing(
             trace_f64: options.trace_f64,
         })
         .collect();
-    let coarse_groups = grids.iter().take_while(|g| g.factor > 1).count();
-    let mut coarse: Vec<HdrImage> = grids[..coarse_groups]
-        .iter()
-        .map(|g| scratch.take(g.width, g.height))
-        .collect();
-    let (per_ghost, spans) = {
-        let mut targets = Targets {
-            grids: &grids,
-            coarse: &mut coarse,
-            out,
-            width: frame.width,
-            blend: if options.replace {
-                Blend::Replace
-            } else {
-                Blend::Add
-            },
-            spans: None,
-        };
-        let per_ghost = render_groups(&ctxs, plans, &groups, options, &mut targets);
-        (per_ghost, targets.spans.unwrap_or_default())
-    };
-    scratch.coarse.extend(coarse.into_iter().zip(spans));
-    // Only what a frame of this size can use again (factors 2 to 64, the largest a plan may
-    // ask for): a resized frame's are let go.
-    scratch.coarse.retain(|(img, _)| {
-        (1..=6).any(|k| {
-            let g = CoarseGrid::for_frame(frame.width, frame.height, 1 << k);
-            (g.width, g.height) == (img.width, img.height)
-        })
+    sink.begin(FrameLevels {
+        frame,
+        grids: &grids,
+        aperture,
     });
+    let per_ghost = render_groups(&ctxs, plans, &groups, options, sink);
+    sink.finish();
     let mut per_light: Vec<Vec<GhostStats>> = plans
         .iter()
         .map(|lp| vec![GhostStats::default(); lp.ghosts.len()])
@@ -224,13 +256,15 @@ pub const FRINGE_MIN_PIXELS: f64 = 32.0;
 /// take (about 40 bytes a vertex, 30 MB at this size) while keeping rasterizer calls few.
 const BATCH_TRIANGLES: usize = 1 << 18;
 
-/// Where the groups are drawn: the coarse groups (the first `coarse.len()`) each into its
-/// coarse frame; those added to (or replacing) the output in one pass once every coarse ghost
-/// is drawn; the full-resolution group then straight into the output. (The same order either
-/// way, so replacing gives what adding to black does.)
+/// The CPU rasterizer as a [`GhostSink`]: each coarse level drawn into its coarse frame
+/// (taken from the scratch); those added to (or replacing) the output in one pass once every
+/// coarse ghost is drawn; the full-resolution level then straight into the output. (The same
+/// order either way, so replacing gives what adding to black does.)
 struct Targets<'a> {
-    grids: &'a [CoarseGrid],
-    coarse: &'a mut [HdrImage],
+    scratch: &'a mut RenderScratch,
+    grids: Vec<CoarseGrid>,
+    coarse: Vec<HdrImage>,
+    aperture: &'a Aperture,
     out: &'a mut [[f32; 3]],
     width: usize,
     blend: Blend,
@@ -246,13 +280,40 @@ impl Targets<'_> {
             let levels: Vec<SpannedLevel<'_>> = self
                 .coarse
                 .iter()
-                .zip(self.grids)
+                .zip(&self.grids)
                 .zip(&spans)
                 .map(|((img, grid), spans)| (img, grid, spans.as_slice()))
                 .collect();
             upsample_spans_into(self.out, self.width, &levels, self.blend);
             self.spans = Some(spans);
         }
+    }
+}
+
+impl GhostSink for Targets<'_> {
+    fn begin(&mut self, levels: FrameLevels<'_>) {
+        self.grids = levels.grids.to_vec();
+        let coarse_count = levels.coarse_count();
+        self.coarse = self.grids[..coarse_count]
+            .iter()
+            .map(|g| self.scratch.take(g.width, g.height))
+            .collect();
+        self.spans = None;
+    }
+
+    fn draw(&mut self, level: usize, mesh: &GhostMesh) {
+        if level < self.coarse.len() {
+            let width = self.grids[level].width;
+            rasterize_ghost_mesh_into(&mut self.coarse[level].pixels, width, mesh, self.aperture);
+        } else {
+            // Every coarse ghost is drawn.
+            self.upsample();
+            rasterize_ghost_mesh_into(self.out, self.width, mesh, self.aperture);
+        }
+    }
+
+    fn finish(&mut self) {
+        self.upsample();
     }
 }
 
@@ -268,7 +329,7 @@ fn render_groups(
     plans: &[LightPlan],
     groups: &[&[(usize, usize, usize)]],
     options: RenderOptions,
-    targets: &mut Targets<'_>,
+    sink: &mut dyn GhostSink,
 ) -> Vec<Vec<GhostStats>> {
     // Units of work, group by group: (group, index in it, a range of that ghost's bands, its
     // triangle count): a group of a fringed ghost's bands (split evenly), or one band.
@@ -298,7 +359,6 @@ fn render_groups(
             })
         })
         .collect();
-    let coarse_groups = targets.coarse.len();
     let mut per_ghost: Vec<Vec<GhostStats>> = groups
         .iter()
         .map(|g| vec![GhostStats::default(); g.len()])
@@ -383,30 +443,16 @@ fn render_groups(
         while i < meshes.len() {
             let gi = units[start + i].0;
             let j = i + units[start + i..end].partition_point(|u| u.0 == gi);
-            if gi >= coarse_groups {
-                // Every coarse ghost is drawn.
-                targets.upsample();
-            }
             all.clear();
             all.reserve(meshes[i..j].iter().map(|(m, _)| m));
             for (mesh, _) in &meshes[i..j] {
                 all.append(mesh);
             }
-            let aperture = ctxs[gi].aperture;
-            match targets.coarse.get_mut(gi) {
-                Some(img) => rasterize_ghost_mesh_into(
-                    &mut img.pixels,
-                    targets.grids[gi].width,
-                    &all,
-                    aperture,
-                ),
-                None => rasterize_ghost_mesh_into(targets.out, targets.width, &all, aperture),
-            }
+            sink.draw(gi, &all);
             i = j;
         }
         drop(meshes);
         start = end;
     }
-    targets.upsample();
     per_ghost
 }

@@ -18,6 +18,9 @@
 //!   shape at the stop and feathered clipping.
 //! - [`fringe`]: all of a dispersive ghost's bands as one mesh, its colour fringes shaded per
 //!   pixel; [`fringe_table`]: the ghost's colour over the dispersion coordinate it looks up.
+//! - [`sink`]: the seam between making a frame's triangles and drawing them — the levels,
+//!   the [`sink::GhostSink`] the CPU rasterizer and the GPU backend both implement, and a
+//!   recording ([`sink::FrameMeshes`]).
 //! - [`table`]: bounds precomputed over a range of angles, stored and interpolated.
 //! - [`olf_table`]: OpenLensFlare's precomputed bounds (`<ghostList>` XML) as such a table,
 //!   checked against the lens, energies traced.
@@ -33,6 +36,7 @@ pub mod mesh;
 pub mod olf_table;
 pub mod render;
 mod row_split;
+pub mod sink;
 pub mod table;
 pub mod triangles;
 
