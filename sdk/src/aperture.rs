@@ -24,14 +24,13 @@
 //! same `(u, v)` ([`Aperture::rasterize_with_overlay`]; the starburst takes it, so dust shows
 //! as the fine streaks and speckle it adds to a starburst).
 
-mod iris;
+pub mod iris;
+use iris::IrisGeometry;
 mod mask;
 #[cfg(test)]
 mod tests;
 
 pub use mask::{ApertureMask, MAX_MASK_TEXELS, OLF_DISTANCE_CLIP, check_mask_size};
-
-use iris::IrisGeometry;
 
 /// Area of a simple polygon (shoelace formula), in the square of its coordinates' unit;
 /// either winding.

@@ -22,28 +22,30 @@
 use std::f64::consts::PI;
 
 #[derive(Clone, Copy, Debug)]
-pub(super) struct IrisGeometry {
+/// An iris's constants, as the signed distance uses them (public for the GPU backend, which
+/// evaluates the same formulas).
+pub struct IrisGeometry {
     /// Number of blades (at least 3).
-    n: f64,
+    pub n: f64,
     /// Angle of blade tip 0 from the +u axis.
-    rotation: f64,
+    pub rotation: f64,
     /// 2π/n and π/n.
-    sector: f64,
-    half: f64,
+    pub sector: f64,
+    pub half: f64,
     /// cos(π/n) (the straight edge's distance from the centre) and sin(π/n) (half a chord).
-    a: f64,
-    c: f64,
+    pub a: f64,
+    pub c: f64,
     /// Edge curvature relative to the unit circle, 0..=1.
-    kappa: f64,
+    pub kappa: f64,
     /// √(1 − κ²c²) and the sagitta (module docs).
-    w: f64,
-    s: f64,
+    pub w: f64,
+    pub s: f64,
     /// The first edge's unit normal and the rotation from one edge to the next, (cos, sin):
     /// folding walks the edges and takes the largest `p·normal` — the nearest edge in angle —
     /// instead of an `atan2` (when `by_normals`).
-    first_normal: [f64; 2],
-    step: [f64; 2],
-    by_normals: bool,
+    pub first_normal: [f64; 2],
+    pub step: [f64; 2],
+    pub by_normals: bool,
 }
 
 /// Blade counts up to this fold by walking the edge normals (real irises have 5 to 18
@@ -51,8 +53,10 @@ pub(super) struct IrisGeometry {
 const MAX_WALK: u32 = 64;
 
 impl IrisGeometry {
-    /// Out-of-range values are made usable (see `Aperture::validate`).
-    pub(super) fn new(blades: u32, rotation_rad: f64, roundness: f64) -> Self {
+    /// The geometry of an iris of `blades` blades (at least 3) turned by `rotation_rad`, its
+    /// edges of curvature `roundness` (clamped to 0..=1). Out-of-range values are made usable
+    /// (see `Aperture::validate`).
+    pub fn new(blades: u32, rotation_rad: f64, roundness: f64) -> Self {
         let n = f64::from(blades.max(3));
         let rotation = if rotation_rad.is_finite() {
             rotation_rad
@@ -121,7 +125,8 @@ impl IrisGeometry {
     }
 
     /// Exact signed distance to the edge (negative inside), normalised units.
-    pub(super) fn signed_distance(&self, u: f64, v: f64) -> f64 {
+    /// Signed distance from `(u, v)` to the edge (negative inside), exact.
+    pub fn signed_distance(&self, u: f64, v: f64) -> f64 {
         let (x, y) = self.fold(u, v);
         let (a, c, k, w) = (self.a, self.c, self.kappa, self.w);
         let dx = x - a;

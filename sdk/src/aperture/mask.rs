@@ -140,6 +140,12 @@ impl ApertureMask {
         &self.data
     }
 
+    /// The signed distance to the edge at each texel centre (normalised units, negative
+    /// inside), row-major like [`Self::data`]: the field [`Self::signed_distance`] interpolates.
+    pub fn distance_field(&self) -> &[f32] {
+        &self.distance
+    }
+
     /// A texel's width and height in normalised units (`2/width`, `2/height`).
     pub fn texel_size(&self) -> (f32, f32) {
         (2.0 / self.width as f32, 2.0 / self.height as f32)

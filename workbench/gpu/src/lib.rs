@@ -2,9 +2,22 @@
 //! the CPU rasterizer also draws from, `flarebench_sdk::ghost::sink`) shaded and rasterized
 //! into linear HDR float targets, coarse levels upsampled, starbursts composited, tone mapped;
 //! headless, with readback for files. See `docs/gpu.md`.
+//!
+//! - [`device`]: finding an adapter, opening the device, its errors kept per frame.
+//! - [`renderer`]: [`GhostRenderer`], the ghost meshes drawn level by level.
+//! - `pipelines`, `targets`, `buffers`, `uniforms`, `timing`: what the renderer is made of.
+//! - `shaders/`: the WGSL (aperture, rasterizer, upsampling).
 
+mod buffers;
 pub mod device;
 mod error;
+mod pipelines;
+pub mod renderer;
+mod targets;
+mod timing;
+mod uniforms;
 
 pub use device::{AdapterChoice, AdapterReport, GpuContext};
 pub use error::GpuError;
+pub use renderer::{FrameReport, GhostRenderer};
+pub use timing::PassTiming;

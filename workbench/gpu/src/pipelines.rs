@@ -1,0 +1,319 @@
+//! The render pipelines and their bind group layouts: one raster pipeline per kind of ghost
+//! triangle (wholly open, edge, fringed), and the upsampling pass.
+
+use crate::targets::TARGET_FORMAT;
+
+/// The kinds of ghost triangle (flarebench_sdk::ghost::mesh::GhostMesh's three meshes).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    Open = 0,
+    Edge = 1,
+    Fringe = 2,
+}
+
+impl Kind {
+    /// Floats per corner.
+    pub fn attrs(self) -> u32 {
+        match self {
+            Kind::Open => 3,
+            Kind::Edge => 8,
+            Kind::Fringe => 12,
+        }
+    }
+
+    pub fn label(self) -> &'static str {
+        match self {
+            Kind::Open => "open triangles",
+            Kind::Edge => "edge triangles",
+            Kind::Fringe => "fringed triangles",
+        }
+    }
+
+    fn entry(self) -> &'static str {
+        match self {
+            Kind::Open => "fs_open",
+            Kind::Edge => "fs_edge",
+            Kind::Fringe => "fs_fringe",
+        }
+    }
+}
+
+/// The raster shaders: the aperture and the rasterizer (with the open and edge shades).
+const RASTER_WGSL: &str = concat!(
+    include_str!("shaders/aperture.wgsl"),
+    include_str!("shaders/raster.wgsl")
+);
+
+/// Every pipeline the ghost renderer uses.
+#[derive(Debug)]
+pub struct Pipelines {
+    raster_layout: wgpu::BindGroupLayout,
+    fringe_layout: wgpu::BindGroupLayout,
+    upsample_layout: wgpu::BindGroupLayout,
+    raster: [Option<wgpu::RenderPipeline>; 3],
+    pub upsample: wgpu::RenderPipeline,
+}
+
+fn storage_entry(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only: true },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+fn uniform_entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+    dynamic: bool,
+    size: u64,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: dynamic,
+            min_binding_size: wgpu::BufferSize::new(size),
+        },
+        count: None,
+    }
+}
+
+/// Additive blending of colour; alpha is kept at 0.
+const ADD: wgpu::BlendState = wgpu::BlendState {
+    color: wgpu::BlendComponent {
+        src_factor: wgpu::BlendFactor::One,
+        dst_factor: wgpu::BlendFactor::One,
+        operation: wgpu::BlendOperation::Add,
+    },
+    alpha: wgpu::BlendComponent {
+        src_factor: wgpu::BlendFactor::One,
+        dst_factor: wgpu::BlendFactor::One,
+        operation: wgpu::BlendOperation::Add,
+    },
+};
+
+fn additive_target() -> Option<wgpu::ColorTargetState> {
+    Some(wgpu::ColorTargetState {
+        format: TARGET_FORMAT,
+        blend: Some(ADD),
+        write_mask: wgpu::ColorWrites::ALL,
+    })
+}
+
+impl Pipelines {
+    pub fn new(device: &wgpu::Device) -> Pipelines {
+        use wgpu::ShaderStages as S;
+        let both = S::VERTEX | S::FRAGMENT;
+        let raster_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("raster"),
+            entries: &[
+                uniform_entry(0, both, true, 16),
+                storage_entry(1, both),
+                storage_entry(2, both),
+                storage_entry(3, both),
+                uniform_entry(4, S::FRAGMENT, false, 80),
+                storage_entry(5, S::FRAGMENT),
+            ],
+        });
+        let fringe_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("fringe tables"),
+            entries: &[storage_entry(0, S::FRAGMENT)],
+        });
+        let upsample_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("upsample"),
+            entries: &[
+                uniform_entry(0, S::FRAGMENT, true, 16),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: S::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+            ],
+        });
+        let raster_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("raster"),
+            source: wgpu::ShaderSource::Wgsl(RASTER_WGSL.into()),
+        });
+        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("raster"),
+            bind_group_layouts: &[Some(&raster_layout)],
+            immediate_size: 0,
+        });
+        let raster = [Kind::Open, Kind::Edge, Kind::Fringe].map(|kind| {
+            (kind != Kind::Fringe).then(|| raster_pipeline(device, &layout, &raster_module, kind))
+        });
+        let upsample_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("upsample"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("shaders/upsample.wgsl").into()),
+        });
+        let upsample_pipeline_layout =
+            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("upsample"),
+                bind_group_layouts: &[Some(&upsample_layout)],
+                immediate_size: 0,
+            });
+        let upsample = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("upsample"),
+            layout: Some(&upsample_pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &upsample_module,
+                entry_point: Some("vs_full"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: None,
+            multisample: wgpu::MultisampleState::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &upsample_module,
+                entry_point: Some("fs_upsample"),
+                compilation_options: Default::default(),
+                targets: &[additive_target()],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        Pipelines {
+            raster_layout,
+            fringe_layout,
+            upsample_layout,
+            raster,
+            upsample,
+        }
+    }
+
+    /// The raster pipeline of `kind`, if this build draws it.
+    pub fn raster(&self, kind: Kind) -> Option<&wgpu::RenderPipeline> {
+        self.raster[kind as usize].as_ref()
+    }
+
+    /// True when fringed triangles are drawn.
+    pub fn has_fringe(&self) -> bool {
+        self.raster[Kind::Fringe as usize].is_some()
+    }
+
+    /// The raster bind group: level blocks, positions, attributes, triangles, aperture block,
+    /// mask fields.
+    pub fn raster_bind_group(
+        &self,
+        device: &wgpu::Device,
+        b: [&wgpu::Buffer; 6],
+    ) -> wgpu::BindGroup {
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("raster"),
+            layout: &self.raster_layout,
+            entries: &[
+                entry(0, b[0], Some(16)),
+                entry(1, b[1], None),
+                entry(2, b[2], None),
+                entry(3, b[3], None),
+                entry(4, b[4], None),
+                entry(5, b[5], None),
+            ],
+        })
+    }
+
+    /// The fringe tables' bind group.
+    pub fn fringe_bind_group(
+        &self,
+        device: &wgpu::Device,
+        tables: &wgpu::Buffer,
+    ) -> wgpu::BindGroup {
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("fringe tables"),
+            layout: &self.fringe_layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: tables.as_entire_binding(),
+            }],
+        })
+    }
+
+    /// The upsampling bind group of one coarse level.
+    pub fn upsample_bind_group(
+        &self,
+        device: &wgpu::Device,
+        blocks: &wgpu::Buffer,
+        view: &wgpu::TextureView,
+    ) -> wgpu::BindGroup {
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("upsample"),
+            layout: &self.upsample_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                        buffer: blocks,
+                        offset: 0,
+                        size: wgpu::BufferSize::new(16),
+                    }),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(view),
+                },
+            ],
+        })
+    }
+}
+
+fn entry(binding: u32, buffer: &wgpu::Buffer, size: Option<u64>) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry {
+        binding,
+        resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+            buffer,
+            offset: 0,
+            size: size.and_then(wgpu::BufferSize::new),
+        }),
+    }
+}
+
+fn raster_pipeline(
+    device: &wgpu::Device,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    kind: Kind,
+) -> wgpu::RenderPipeline {
+    let constants = [("ATTRS", f64::from(kind.attrs()))];
+    let options = wgpu::PipelineCompilationOptions {
+        constants: &constants,
+        zero_initialize_workgroup_memory: false,
+    };
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(kind.label()),
+        layout: Some(layout),
+        vertex: wgpu::VertexState {
+            module,
+            entry_point: Some("vs_main"),
+            compilation_options: options.clone(),
+            buffers: &[],
+        },
+        primitive: wgpu::PrimitiveState {
+            topology: wgpu::PrimitiveTopology::TriangleList,
+            cull_mode: None,
+            ..Default::default()
+        },
+        depth_stencil: None,
+        multisample: wgpu::MultisampleState::default(),
+        fragment: Some(wgpu::FragmentState {
+            module,
+            entry_point: Some(kind.entry()),
+            compilation_options: options,
+            targets: &[additive_target()],
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}

@@ -1,0 +1,455 @@
+//! [`GhostRenderer`]: the GPU backend as a [`GhostSink`]. A frame's meshes are gathered as
+//! they come, uploaded once when the frame ends, and drawn level by level: each coarse level
+//! into its own Rgba32Float target, then the output target — the coarse levels added by
+//! exact bilinear upsampling, the full-resolution meshes drawn on top, all additively.
+
+use std::sync::Arc;
+
+use flarebench_sdk::aperture::Aperture;
+use flarebench_sdk::frame::Frame;
+use flarebench_sdk::ghost::mesh::{GhostMesh, Mesh, SAMPLED_MIN_AREA};
+use flarebench_sdk::ghost::sink::{FrameLevels, GhostSink};
+use flarebench_sdk::image::{CoarseGrid, HdrImage};
+
+use crate::buffers::GrowBuffer;
+use crate::pipelines::{Kind, Pipelines};
+use crate::targets::{LevelTargets, TARGET_FORMAT};
+use crate::timing::{PassTimer, PassTiming};
+use crate::uniforms::{ApertureBlock, BLOCK_STRIDE, LevelBlock, UpsampleBlock, strided};
+use crate::{GpuContext, GpuError};
+
+/// A run of one kind's triangles drawn into one level.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Draw {
+    level: usize,
+    kind: Kind,
+    first: u32,
+    count: u32,
+}
+
+/// The storage buffers of one kind of triangle.
+#[derive(Debug)]
+struct KindBuffers {
+    positions: GrowBuffer,
+    attrs: GrowBuffer,
+    triangles: GrowBuffer,
+}
+
+impl KindBuffers {
+    fn new(device: &wgpu::Device, kind: Kind) -> Self {
+        let usage = wgpu::BufferUsages::STORAGE;
+        let label = kind.label();
+        KindBuffers {
+            positions: GrowBuffer::new(device, label, usage),
+            attrs: GrowBuffer::new(device, label, usage),
+            triangles: GrowBuffer::new(device, label, usage),
+        }
+    }
+
+    /// Uploads `mesh`; returns the bytes written.
+    fn upload<const N: usize>(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        mesh: &Mesh<N>,
+    ) -> u64 {
+        let p: &[u8] = bytemuck::cast_slice(&mesh.positions);
+        let a: &[u8] = bytemuck::cast_slice(&mesh.attrs);
+        let t: &[u8] = bytemuck::cast_slice(&mesh.triangles);
+        self.positions.write(device, queue, p);
+        self.attrs.write(device, queue, a);
+        self.triangles.write(device, queue, t);
+        (p.len() + a.len() + t.len()) as u64
+    }
+}
+
+/// What the last frame drew and cost.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FrameReport {
+    /// Triangles drawn: wholly open, on an edge, fringed.
+    pub triangles: [usize; 3],
+    /// Bytes uploaded (meshes, tables, uniforms).
+    pub bytes_uploaded: u64,
+    /// Draw calls recorded.
+    pub draw_calls: usize,
+    /// GPU time per pass, when the adapter measures it.
+    pub passes: Vec<PassTiming>,
+}
+
+/// The GPU ghost renderer (module docs). Buffers and targets are kept from frame to frame.
+#[derive(Debug)]
+pub struct GhostRenderer {
+    ctx: Arc<GpuContext>,
+    pipelines: Pipelines,
+    kinds: [KindBuffers; 3],
+    fringe_tables: GrowBuffer,
+    level_blocks: GrowBuffer,
+    upsample_blocks: GrowBuffer,
+    aperture_block: wgpu::Buffer,
+    mask_fields: GrowBuffer,
+    /// The mask whose fields `mask_fields` holds.
+    mask_uploaded: Option<flarebench_sdk::aperture::ApertureMask>,
+    targets: LevelTargets,
+    timer: Option<PassTimer>,
+    // The frame being gathered.
+    frame: Option<Frame>,
+    grids: Vec<CoarseGrid>,
+    aperture: ApertureBlock,
+    staging: GhostMesh,
+    draws: Vec<Draw>,
+    error: Option<GpuError>,
+    report: FrameReport,
+}
+
+impl GhostRenderer {
+    /// A renderer on `ctx`'s device.
+    pub fn new(ctx: Arc<GpuContext>) -> GhostRenderer {
+        let device = &ctx.device;
+        let storage = wgpu::BufferUsages::STORAGE;
+        let uniform = wgpu::BufferUsages::UNIFORM;
+        GhostRenderer {
+            pipelines: Pipelines::new(device),
+            kinds: [Kind::Open, Kind::Edge, Kind::Fringe].map(|k| KindBuffers::new(device, k)),
+            fringe_tables: GrowBuffer::new(device, "fringe tables", storage),
+            level_blocks: GrowBuffer::new(device, "level blocks", uniform),
+            upsample_blocks: GrowBuffer::new(device, "upsample blocks", uniform),
+            aperture_block: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("aperture"),
+                size: size_of::<ApertureBlock>() as u64,
+                usage: uniform | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            mask_fields: GrowBuffer::new(device, "mask fields", storage),
+            mask_uploaded: None,
+            targets: LevelTargets::default(),
+            timer: ctx.report.timestamps.then(|| PassTimer::new(&ctx)),
+            frame: None,
+            grids: Vec::new(),
+            aperture: ApertureBlock::new(&Aperture::Circular),
+            staging: GhostMesh::default(),
+            draws: Vec::new(),
+            error: None,
+            report: FrameReport::default(),
+            ctx,
+        }
+    }
+
+    /// The device this renderer draws on.
+    pub fn context(&self) -> &Arc<GpuContext> {
+        &self.ctx
+    }
+
+    /// The output target of the last frame (linear HDR, Rgba32Float): what [`Self::read_back`]
+    /// reads, and what a window samples.
+    pub fn output(&self) -> Option<&wgpu::Texture> {
+        self.targets.output()
+    }
+
+    /// What the last frame drew and cost (pass times once [`Self::read_back`] has run).
+    pub fn report(&self) -> &FrameReport {
+        &self.report
+    }
+
+    /// The first error of the last frame, if any (a sink's calls cannot return one).
+    pub fn take_error(&mut self) -> Result<(), GpuError> {
+        match self.error.take() {
+            Some(e) => Err(e),
+            None => self.ctx.check(),
+        }
+    }
+
+    /// Waits for the last frame and reads its image back (linear RGB, the frame's size).
+    pub fn read_back(&mut self) -> Result<HdrImage, GpuError> {
+        self.take_error()?;
+        let Some(frame) = self.frame else {
+            return Ok(HdrImage::new(0, 0));
+        };
+        let image = self
+            .targets
+            .read_back(&self.ctx, frame.width, frame.height)?;
+        if let Some(timer) = &mut self.timer {
+            self.report.passes = timer.read(&self.ctx)?;
+        }
+        self.ctx.check()?;
+        Ok(image)
+    }
+
+    fn fail(&mut self, e: GpuError) {
+        self.error.get_or_insert(e);
+    }
+
+    /// Uploads the mask's fields when they changed.
+    fn upload_mask(&mut self, aperture: &Aperture) {
+        let Aperture::Mask(mask) = aperture else {
+            return;
+        };
+        if self.mask_uploaded.as_ref() == Some(mask) {
+            return;
+        }
+        let mut fields = Vec::with_capacity(2 * mask.data().len());
+        fields.extend_from_slice(mask.data());
+        fields.extend_from_slice(mask.distance_field());
+        let bytes: &[u8] = bytemuck::cast_slice(&fields);
+        self.mask_fields
+            .write(&self.ctx.device, &self.ctx.queue, bytes);
+        self.report.bytes_uploaded += bytes.len() as u64;
+        self.mask_uploaded = Some(mask.clone());
+    }
+
+    /// Records a mesh's triangles of each kind as draws into `level`.
+    fn gather(&mut self, level: usize, mesh: &GhostMesh) {
+        let before = [
+            self.staging.open.len(),
+            self.staging.edge.len(),
+            self.staging.fringe.len(),
+        ];
+        self.staging.append(mesh);
+        let after = [
+            self.staging.open.len(),
+            self.staging.edge.len(),
+            self.staging.fringe.len(),
+        ];
+        for (k, kind) in [Kind::Open, Kind::Edge, Kind::Fringe]
+            .into_iter()
+            .enumerate()
+        {
+            let count = after[k] - before[k];
+            if count == 0 {
+                continue;
+            }
+            match self
+                .draws
+                .iter_mut()
+                .rev()
+                .find(|d| d.kind == kind)
+                .filter(|d| d.level == level && (d.first + d.count) as usize == before[k])
+            {
+                Some(d) => d.count += count as u32,
+                None => self.draws.push(Draw {
+                    level,
+                    kind,
+                    first: before[k] as u32,
+                    count: count as u32,
+                }),
+            }
+        }
+    }
+
+    fn submit(&mut self) -> Result<(), GpuError> {
+        let frame = self.frame.expect("a frame has begun");
+        let max = self.ctx.limits.max_texture_dimension_2d;
+        if frame.width > max as usize || frame.height > max as usize {
+            return Err(GpuError::FrameTooLarge {
+                width: frame.width,
+                height: frame.height,
+                max,
+            });
+        }
+        let (device, queue) = (&self.ctx.device, &self.ctx.queue);
+        let coarse_count = self.grids.iter().take_while(|g| g.factor > 1).count();
+        self.targets.prepare(
+            device,
+            frame.width,
+            frame.height,
+            &self.grids[..coarse_count],
+        );
+        // Uploads: meshes, fringe tables, uniforms.
+        let mut bytes = 0;
+        bytes += self.kinds[0].upload(device, queue, &self.staging.open);
+        bytes += self.kinds[1].upload(device, queue, &self.staging.edge);
+        bytes += self.kinds[2].upload(device, queue, &self.staging.fringe);
+        if !self.staging.fringe.is_empty() && !self.pipelines.has_fringe() {
+            return Err(GpuError::Unsupported {
+                name: self.ctx.report.name.clone(),
+                what: "fringed meshes are not drawn on the GPU yet: render band by band".into(),
+            });
+        }
+        let tables: Vec<f32> = vec![0.0];
+        let table_bytes: &[u8] = bytemuck::cast_slice(&tables);
+        self.fringe_tables.write(device, queue, table_bytes);
+        bytes += table_bytes.len() as u64;
+        // Level blocks: one per level, the output frame's for the full-resolution one.
+        let level_blocks: Vec<LevelBlock> = self
+            .grids
+            .iter()
+            .map(|g| {
+                let f = frame.coarse(g);
+                LevelBlock {
+                    size: [f.width as f32, f.height as f32],
+                    min_area: SAMPLED_MIN_AREA,
+                    _pad: 0.0,
+                }
+            })
+            .collect();
+        let level_bytes = strided(&level_blocks);
+        self.level_blocks.write(device, queue, &level_bytes);
+        let upsample: Vec<UpsampleBlock> = self.grids[..coarse_count]
+            .iter()
+            .map(|g| UpsampleBlock {
+                factor: g.factor as f32,
+                norm: 1.0 / (g.factor * g.factor) as f32,
+                offset: [g.offset[0] as f32, g.offset[1] as f32],
+            })
+            .collect();
+        let upsample_bytes = strided(&upsample);
+        self.upsample_blocks.write(device, queue, &upsample_bytes);
+        queue.write_buffer(&self.aperture_block, 0, bytemuck::bytes_of(&self.aperture));
+        bytes += (level_bytes.len() + upsample_bytes.len()) as u64;
+        self.report.bytes_uploaded += bytes;
+
+        let raster_groups: Vec<wgpu::BindGroup> = (0..3)
+            .map(|k| {
+                let b = &self.kinds[k];
+                self.pipelines.raster_bind_group(
+                    device,
+                    [
+                        self.level_blocks.buffer(),
+                        b.positions.buffer(),
+                        b.attrs.buffer(),
+                        b.triangles.buffer(),
+                        &self.aperture_block,
+                        self.mask_fields.buffer(),
+                    ],
+                )
+            })
+            .collect();
+        let fringe_group = self
+            .pipelines
+            .fringe_bind_group(device, self.fringe_tables.buffer());
+        let upsample_groups: Vec<wgpu::BindGroup> = (0..coarse_count)
+            .map(|l| {
+                self.pipelines.upsample_bind_group(
+                    device,
+                    self.upsample_blocks.buffer(),
+                    self.targets.level_view(l),
+                )
+            })
+            .collect();
+
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("ghost frame"),
+        });
+        let draws = &self.draws;
+        let pipelines = &self.pipelines;
+        let record = |pass: &mut wgpu::RenderPass<'_>, level: usize| -> usize {
+            let mut calls = 0;
+            for d in draws.iter().filter(|d| d.level == level) {
+                let k = d.kind as usize;
+                let Some(pipeline) = pipelines.raster(d.kind) else {
+                    continue;
+                };
+                pass.set_pipeline(pipeline);
+                pass.set_bind_group(
+                    0,
+                    &raster_groups[k],
+                    &[(level as u64 * BLOCK_STRIDE) as u32],
+                );
+                if d.kind == Kind::Fringe {
+                    pass.set_bind_group(1, &fringe_group, &[]);
+                }
+                pass.draw(0..6, d.first..d.first + d.count);
+                calls += 1;
+            }
+            calls
+        };
+        let mut calls = 0;
+        for level in 0..coarse_count {
+            let name = format!("coarse level ×{}", self.grids[level].factor);
+            let timestamps = self.timer.as_mut().and_then(|t| t.pass(name));
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("coarse level"),
+                color_attachments: &[Some(clear_attachment(self.targets.level_view(level)))],
+                depth_stencil_attachment: None,
+                timestamp_writes: timestamps,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            calls += record(&mut pass, level);
+        }
+        {
+            let timestamps = self
+                .timer
+                .as_mut()
+                .and_then(|t| t.pass("full resolution".to_string()));
+            let output = self.targets.output_view().expect("prepared above");
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("full resolution"),
+                color_attachments: &[Some(clear_attachment(output))],
+                depth_stencil_attachment: None,
+                timestamp_writes: timestamps,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(&self.pipelines.upsample);
+            for (l, group) in upsample_groups.iter().enumerate() {
+                pass.set_bind_group(0, group, &[(l as u64 * BLOCK_STRIDE) as u32]);
+                pass.draw(0..3, 0..1);
+                calls += 1;
+            }
+            if self.grids.len() > coarse_count {
+                calls += record(&mut pass, coarse_count);
+            }
+        }
+        if let Some(timer) = &mut self.timer {
+            timer.resolve(&mut encoder);
+        }
+        queue.submit([encoder.finish()]);
+        self.report.draw_calls = calls;
+        Ok(())
+    }
+}
+
+fn clear_attachment(view: &wgpu::TextureView) -> wgpu::RenderPassColorAttachment<'_> {
+    wgpu::RenderPassColorAttachment {
+        view,
+        depth_slice: None,
+        resolve_target: None,
+        ops: wgpu::Operations {
+            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+            store: wgpu::StoreOp::Store,
+        },
+    }
+}
+
+impl GhostSink for GhostRenderer {
+    fn begin(&mut self, levels: FrameLevels<'_>) {
+        self.frame = Some(levels.frame);
+        self.grids = levels.grids.to_vec();
+        self.aperture = ApertureBlock::new(levels.aperture);
+        self.staging.clear();
+        self.draws.clear();
+        self.error = None;
+        self.report = FrameReport::default();
+        if let Some(timer) = &mut self.timer {
+            timer.clear();
+        }
+        self.upload_mask(levels.aperture);
+    }
+
+    fn draw(&mut self, level: usize, mesh: &GhostMesh) {
+        if level >= self.grids.len() {
+            self.fail(GpuError::Device {
+                what: format!("a mesh for level {level} of {}", self.grids.len()),
+            });
+            return;
+        }
+        self.gather(level, mesh);
+    }
+
+    fn finish(&mut self) {
+        if self.frame.is_none() {
+            return;
+        }
+        self.report.triangles = [
+            self.staging.open.len(),
+            self.staging.edge.len(),
+            self.staging.fringe.len(),
+        ];
+        if let Err(e) = self.submit() {
+            self.fail(e);
+        }
+    }
+}
+
+/// The target format of every level: linear RGBA, 32-bit float, blended additively.
+pub const FORMAT: wgpu::TextureFormat = TARGET_FORMAT;

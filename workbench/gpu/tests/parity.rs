@@ -1,0 +1,84 @@
+//! The GPU image of a frame equals the CPU image of the same frame description
+//! (`flarebench_sdk::ghost::sink::FrameMeshes`, drawn by both): relative RMSE and energy
+//! within the bounds, and no NaN or Inf.
+
+use std::sync::{Arc, OnceLock};
+
+use flarebench_gpu::{AdapterChoice, GhostRenderer, GpuContext};
+use flarebench_sdk::aperture::Aperture;
+use flarebench_sdk::frame::Frame;
+use flarebench_sdk::ghost::sink::FrameMeshes;
+use flarebench_sdk::image::HdrImage;
+use flarebench_test_support::load_lens;
+use ghost_raytrace::ghosts::{self, RenderOptions};
+use ghost_raytrace::plan::{self, PlanOptions};
+use ghost_raytrace::scene::{LightSpec, Quality};
+
+/// Relative RMSE of the GPU image against the CPU image.
+const MAX_RMSE: f64 = 0.005;
+/// Relative difference of the images' luminance sums.
+const MAX_ENERGY: f64 = 0.001;
+
+fn context() -> Arc<GpuContext> {
+    static CTX: OnceLock<Arc<GpuContext>> = OnceLock::new();
+    CTX.get_or_init(|| Arc::new(GpuContext::new(AdapterChoice::Any).expect("a GPU adapter")))
+        .clone()
+}
+
+fn record(lens: &str, lights: &[&str], aperture: &Aperture, band_by_band: bool) -> FrameMeshes {
+    let sys = load_lens(lens);
+    let frame = Frame::across_film(960, 540, sys.film_width_mm);
+    let lights: Vec<LightSpec> = lights
+        .iter()
+        .map(|l| LightSpec::parse(l).unwrap())
+        .collect();
+    let opts = PlanOptions::for_quality(Quality::Default, None);
+    let plans = plan::plan(&sys, &lights, &frame, &opts).unwrap();
+    let options = RenderOptions {
+        band_by_band,
+        ..RenderOptions::default()
+    };
+    let mut recorded = FrameMeshes::default();
+    ghosts::draw_into(&sys, aperture, frame, &plans, options, &mut recorded).unwrap();
+    recorded
+}
+
+fn gpu_image(recorded: &FrameMeshes) -> HdrImage {
+    let mut gpu = GhostRenderer::new(context());
+    recorded.replay(&mut gpu);
+    gpu.read_back().expect("the GPU frame")
+}
+
+fn check(name: &str, recorded: &FrameMeshes) {
+    let cpu = recorded.draw_cpu();
+    let gpu = gpu_image(recorded);
+    assert!(!gpu.has_non_finite(), "{name}: NaN or Inf in the GPU image");
+    let c = gpu.compare(&cpu).unwrap();
+    eprintln!(
+        "{name}: {} triangles, levels {:?}: rmse {:.2e}, energy {:.2e}",
+        recorded.triangles(),
+        recorded
+            .levels
+            .as_ref()
+            .map(|l| l.1.iter().map(|g| g.factor).collect::<Vec<_>>()),
+        c.relative_rmse,
+        c.energy_error
+    );
+    assert!(cpu.luminance_sum() > 0.0, "{name}: the frame is black");
+    assert!(
+        c.relative_rmse <= MAX_RMSE,
+        "{name}: rmse {}",
+        c.relative_rmse
+    );
+    assert!(
+        c.energy_error.abs() <= MAX_ENERGY,
+        "{name}: energy {}",
+        c.energy_error
+    );
+}
+
+#[test]
+fn heliar_band_by_band_circle() {
+    let r = record("heliar-tronnier", &["8,60"], &Aperture::Circular, true);
+    check("heliar circle", &r);
+}
