@@ -3,6 +3,7 @@
 //! The optics live in `flarebench-sdk`; this crate turns them into commands.
 
 pub mod aperture_file;
+pub mod backend;
 pub mod cli;
 pub mod compose;
 #[cfg(feature = "tui")]

@@ -2,6 +2,7 @@
 
 use serde::Serialize;
 
+use crate::backend::BackendReport;
 use crate::compose::StarburstLine;
 
 use flarebench_sdk::ghost::ReflectionOrder;
@@ -97,6 +98,8 @@ pub struct RenderReport {
     /// One entry per light when starbursts are on (`compose::StarburstLine`).
     pub starbursts: Vec<StarburstLine>,
     pub error: Option<ErrorReport>,
+    /// Where the ghosts were drawn (`crate::backend`).
+    pub backend: BackendReport,
 }
 
 impl LightReport {
@@ -167,6 +170,7 @@ impl RenderReport {
             "rays traced {}, triangles {}\n",
             self.rays_traced, self.triangles
         );
+        s += &self.backend.text();
         for (i, l) in self.lights.iter().enumerate() {
             s += &format!(
                 "light {i} at θ {}°, φ {}°: {} of {} ghosts traced, {} left out ({:.3}% of the ghost energy); ghosts carry {:.3e} of the direct image's energy\n",

@@ -96,21 +96,39 @@ fn olf_mask() -> Aperture {
     let path = flarebench_test_support::lenses_dir().join("masks/aperture.bmp");
     let img = image::open(&path).expect("the bundled mask").to_luma8();
     let (w, h) = img.dimensions();
-    let mask = flarebench_sdk::aperture::ApertureMask::from_luma(w as usize, h as usize, img.as_raw())
-        .expect("a valid mask");
+    let mask =
+        flarebench_sdk::aperture::ApertureMask::from_luma(w as usize, h as usize, img.as_raw())
+            .expect("a valid mask");
     Aperture::Mask(mask)
 }
 
 #[test]
 fn heliar_band_by_band_iris_and_mask() {
-    check("heliar iris", &record("heliar-tronnier", &["8,60"], &iris(), true));
-    check("heliar mask", &record("heliar-tronnier", &["8,60"], &olf_mask(), true));
+    check(
+        "heliar iris",
+        &record("heliar-tronnier", &["8,60"], &iris(), true),
+    );
+    check(
+        "heliar mask",
+        &record("heliar-tronnier", &["8,60"], &olf_mask(), true),
+    );
 }
 
 #[test]
 fn nikon_band_by_band_two_lights() {
-    let r = record("nikon-zoom-short", &["10,30", "4,200,0.5"], &Aperture::Circular, true);
+    let r = record(
+        "nikon-zoom-short",
+        &["10,30", "4,200,0.5"],
+        &Aperture::Circular,
+        true,
+    );
     check("nikon circle, two lights", &r);
-    check("nikon iris", &record("nikon-zoom-short", &["10,30"], &iris(), true));
-    check("nikon mask", &record("nikon-zoom-short", &["10,30"], &olf_mask(), true));
+    check(
+        "nikon iris",
+        &record("nikon-zoom-short", &["10,30"], &iris(), true),
+    );
+    check(
+        "nikon mask",
+        &record("nikon-zoom-short", &["10,30"], &olf_mask(), true),
+    );
 }

@@ -15,6 +15,7 @@ use ghost_raytrace::scene::{LightSpec, Quality};
 use ghost_raytrace::{ghosts, plan};
 
 use crate::aperture_file::{MaskEncoding, load_aperture_mask};
+use crate::backend::{BackendChoice, GhostBackend};
 use crate::compose::{StarburstSetup, add_onto, add_starbursts};
 use crate::input_image::read_input_image;
 use crate::lens_library;
@@ -64,6 +65,10 @@ pub struct RenderArgs {
     /// Trace the ghosts in f64 instead of f32 (slower; for checking precision).
     #[arg(long)]
     pub f64: bool,
+    /// Where the ghosts are drawn: auto (a hardware GPU if there is one, else the CPU), cpu,
+    /// or gpu (any adapter, a software one such as lavapipe included). docs/gpu.md.
+    #[arg(long, value_enum, default_value_t = BackendChoice::Auto)]
+    pub backend: BackendChoice,
     /// Draw every wavelength band of a dispersive ghost on its own instead of groups of bands
     /// as one mesh with per-pixel colour fringes (slower; for comparison).
     #[arg(long)]
@@ -347,7 +352,8 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
     timings.plan_ms = ms(t);
 
     let t = Instant::now();
-    let (mut img, stats) = ghosts::render_with(
+    let mut backend = GhostBackend::open(args.backend)?;
+    let (mut img, stats) = backend.render(
         sys,
         &aperture,
         frame,
@@ -460,6 +466,7 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
         lights,
         starbursts,
         error,
+        backend: backend.report().clone(),
     };
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);

@@ -27,6 +27,10 @@ struct VsOut {
     @builtin(position) pos: vec4<f32>,
     @location(0) @interpolate(flat) tri: u32,
     @location(1) @interpolate(flat) small: u32,
+    // A large triangle's attributes, interpolated by the rasterizer (up to 12 floats).
+    @location(2) @interpolate(linear) a0: vec4<f32>,
+    @location(3) @interpolate(linear) a1: vec4<f32>,
+    @location(4) @interpolate(linear) a2: vec4<f32>,
 }
 
 fn is_finite(x: f32) -> bool {
@@ -81,6 +85,10 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) t: u32) -> V
     if area >= level.min_area {
         if vi < 3u {
             out.pos = to_clip(corner(t, vi));
+            let a = corner_attrs(t, vi);
+            out.a0 = vec4<f32>(a[0], a[1], a[2], a[3]);
+            out.a1 = vec4<f32>(a[4], a[5], a[6], a[7]);
+            out.a2 = vec4<f32>(a[8], a[9], a[10], a[11]);
         }
         return out;
     }
@@ -170,21 +178,23 @@ fn clip_edge(p: Poly, a: vec2<f32>, b: vec2<f32>, sign: f32) -> Poly {
     return out;
 }
 
-fn sample(frag: vec4<f32>, t: u32, small: u32) -> Sample {
+fn sample(in: VsOut) -> Sample {
+    var s: Sample;
+    if in.small == 0u {
+        // Point sampling at the pixel centre: the rasterizer's interpolated attributes.
+        s.weight = 1.0;
+        s.a = array<f32, 12>(
+            in.a0.x, in.a0.y, in.a0.z, in.a0.w,
+            in.a1.x, in.a1.y, in.a1.z, in.a1.w,
+            in.a2.x, in.a2.y, in.a2.z, in.a2.w,
+        );
+        return s;
+    }
+    let frag = in.pos;
+    let t = in.tri;
     let p0 = corner(t, 0u);
     let p1 = corner(t, 1u);
     let p2 = corner(t, 2u);
-    var s: Sample;
-    if small == 0u {
-        // Point sampling at the pixel centre (the fragment's position).
-        let e1 = p1 - p0;
-        let e2 = p2 - p0;
-        let d = frag.xy - p0;
-        let inv = 1.0 / cross2(e1, e2);
-        s.weight = 1.0;
-        s.a = interpolate(t, cross2(d, e2) * inv, cross2(e1, d) * inv);
-        return s;
-    }
     // Exact coverage: the pixel square clipped to the triangle.
     let origin = floor(frag.xy);
     let q0 = p0 - origin;
@@ -247,7 +257,7 @@ fn smoothstep_between(e0: f32, e1: f32, x: f32) -> f32 {
 // Wholly open triangles: the interpolated RGB irradiance.
 @fragment
 fn fs_open(in: VsOut) -> @location(0) vec4<f32> {
-    let s = sample(in.pos, in.tri, in.small);
+    let s = sample(in);
     if !(s.weight > 0.0) {
         discard;
     }
@@ -258,7 +268,7 @@ fn fs_open(in: VsOut) -> @location(0) vec4<f32> {
 // feathered clip at relative radius 1 and, where flagged, the aperture at the stop crossing.
 @fragment
 fn fs_edge(in: VsOut) -> @location(0) vec4<f32> {
-    let s = sample(in.pos, in.tri, in.small);
+    let s = sample(in);
     if !(s.weight > 0.0) {
         discard;
     }

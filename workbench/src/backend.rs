@@ -1,0 +1,259 @@
+//! Where ghosts are drawn: the CPU rasterizer or the GPU backend (`flarebench-gpu`), chosen by
+//! `--backend cpu|gpu|auto`. Both draw the same frame description
+//! (`ghost_raytrace::ghosts::draw_into`); tracing and meshing stay on the CPU either way.
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use flarebench_sdk::LensSystem;
+use flarebench_sdk::aperture::Aperture;
+use flarebench_sdk::frame::Frame;
+use flarebench_sdk::ghost::context::GhostStats;
+use flarebench_sdk::image::HdrImage;
+use ghost_raytrace::ghosts::{self, RenderOptions, RenderScratch};
+use ghost_raytrace::plan::LightPlan;
+use serde::Serialize;
+
+/// The `--backend` choice.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum BackendChoice {
+    /// The GPU when the machine has a hardware one, else the CPU (a software adapter such as
+    /// lavapipe is used only when asked for with `gpu`).
+    #[default]
+    Auto,
+    /// The CPU rasterizer.
+    Cpu,
+    /// The GPU backend on the best adapter there is, a software one included.
+    Gpu,
+}
+
+impl std::fmt::Display for BackendChoice {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            BackendChoice::Auto => "auto",
+            BackendChoice::Cpu => "cpu",
+            BackendChoice::Gpu => "gpu",
+        })
+    }
+}
+
+/// What a frame's ghosts were drawn with, for reports.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct BackendReport {
+    /// `cpu` or `gpu`.
+    pub backend: String,
+    /// Why `auto` chose the CPU (absent otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub note: Option<String>,
+    /// The GPU adapter, its driver and graphics API (GPU only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub adapter: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub driver: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub api: Option<String>,
+    /// True for a software adapter (its times say nothing of a real GPU's).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub software_adapter: bool,
+    /// GPU only: CPU time tracing and meshing the frame (ms), the triangles uploaded (open,
+    /// edge, fringed), bytes uploaded, draw calls, and GPU time per pass (ms, where the
+    /// adapter measures it).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mesh_ms: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gpu_ms: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub triangles: Option<[usize; 3]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bytes_uploaded: Option<u64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub draw_calls: Option<usize>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub passes: Vec<PassLine>,
+}
+
+/// One GPU pass's time.
+#[derive(Clone, Debug, Serialize)]
+pub struct PassLine {
+    pub pass: String,
+    pub ms: f64,
+}
+
+impl BackendReport {
+    /// One line of text for `--report`.
+    pub fn text(&self) -> String {
+        let mut s = format!("backend: {}", self.backend);
+        if let Some(a) = &self.adapter {
+            s += &format!(
+                " on {a} ({}, {}{})",
+                self.driver.as_deref().unwrap_or("?"),
+                self.api.as_deref().unwrap_or("?"),
+                if self.software_adapter {
+                    ", software"
+                } else {
+                    ""
+                }
+            );
+        }
+        if let Some(n) = &self.note {
+            s += &format!(" ({n})");
+        }
+        s += "\n";
+        if let (Some(mesh), Some(t)) = (self.mesh_ms, self.triangles) {
+            s += &format!(
+                "  CPU tracing and meshing {mesh:.1} ms; {} triangles uploaded ({} open, {} edge, {} fringed), {:.1} MB, {} draw calls\n",
+                t.iter().sum::<usize>(),
+                t[0],
+                t[1],
+                t[2],
+                self.bytes_uploaded.unwrap_or(0) as f64 / 1e6,
+                self.draw_calls.unwrap_or(0)
+            );
+        }
+        if !self.passes.is_empty() {
+            let passes: Vec<String> = self
+                .passes
+                .iter()
+                .map(|p| format!("{} {:.2} ms", p.pass, p.ms))
+                .collect();
+            s += &format!("  GPU passes: {}\n", passes.join(", "));
+        }
+        s
+    }
+}
+
+/// An open backend, kept from frame to frame (buffers, targets, the device).
+#[derive(Debug)]
+pub struct GhostBackend {
+    active: Active,
+    report: BackendReport,
+}
+
+#[derive(Debug)]
+enum Active {
+    Cpu(RenderScratch),
+    #[cfg(feature = "gpu")]
+    Gpu(Box<flarebench_gpu::GhostRenderer>),
+}
+
+impl GhostBackend {
+    /// Opens the backend `choice` asks for: `auto` falls back to the CPU (saying why in the
+    /// report) when there is no hardware GPU; `gpu` fails with what to install.
+    pub fn open(choice: BackendChoice) -> anyhow::Result<GhostBackend> {
+        match choice {
+            BackendChoice::Cpu => Ok(GhostBackend::cpu(None)),
+            #[cfg(feature = "gpu")]
+            BackendChoice::Gpu | BackendChoice::Auto => {
+                use flarebench_gpu::{AdapterChoice, GhostRenderer, GpuContext};
+                let adapters = if choice == BackendChoice::Gpu {
+                    AdapterChoice::Any
+                } else {
+                    AdapterChoice::Hardware
+                };
+                match GpuContext::new(adapters) {
+                    Ok(ctx) => {
+                        let r = &ctx.report;
+                        let report = BackendReport {
+                            backend: "gpu".into(),
+                            adapter: Some(r.name.clone()),
+                            driver: Some(r.driver.clone()),
+                            api: Some(r.backend.clone()),
+                            software_adapter: r.software,
+                            ..BackendReport::default()
+                        };
+                        let renderer = GhostRenderer::new(Arc::new(ctx));
+                        Ok(GhostBackend {
+                            active: Active::Gpu(Box::new(renderer)),
+                            report,
+                        })
+                    }
+                    Err(e) if choice == BackendChoice::Auto => {
+                        Ok(GhostBackend::cpu(Some(format!("auto: {e}"))))
+                    }
+                    Err(e) => Err(anyhow::Error::new(e).context("--backend gpu")),
+                }
+            }
+            #[cfg(not(feature = "gpu"))]
+            BackendChoice::Gpu => anyhow::bail!(
+                "--backend gpu: this flarebench was built without the GPU backend (cargo feature `gpu`)"
+            ),
+            #[cfg(not(feature = "gpu"))]
+            BackendChoice::Auto => Ok(GhostBackend::cpu(Some(
+                "auto: built without the GPU backend".into(),
+            ))),
+        }
+    }
+
+    fn cpu(note: Option<String>) -> GhostBackend {
+        GhostBackend {
+            active: Active::Cpu(RenderScratch::default()),
+            report: BackendReport {
+                backend: "cpu".into(),
+                note,
+                ..BackendReport::default()
+            },
+        }
+    }
+
+    /// True when ghosts are drawn on the GPU.
+    pub fn is_gpu(&self) -> bool {
+        !matches!(self.active, Active::Cpu(_))
+    }
+
+    /// What the last frame was drawn with and cost.
+    pub fn report(&self) -> &BackendReport {
+        &self.report
+    }
+
+    /// Draws every planned ghost into a new image of the frame's size; per light, each
+    /// ghost's statistics in plan order.
+    pub fn render(
+        &mut self,
+        system: &LensSystem,
+        aperture: &Aperture,
+        frame: Frame,
+        plans: &[LightPlan],
+        options: RenderOptions,
+    ) -> anyhow::Result<(HdrImage, Vec<Vec<GhostStats>>)> {
+        match &mut self.active {
+            Active::Cpu(scratch) => {
+                let mut img = HdrImage::new(frame.width, frame.height);
+                let stats = ghosts::render_into_reusing(
+                    system,
+                    aperture,
+                    frame,
+                    plans,
+                    options,
+                    scratch,
+                    &mut img.pixels,
+                )?;
+                Ok((img, stats))
+            }
+            #[cfg(feature = "gpu")]
+            Active::Gpu(renderer) => {
+                let t = Instant::now();
+                let stats =
+                    ghosts::draw_into(system, aperture, frame, plans, options, renderer.as_mut())?;
+                let mesh_ms = t.elapsed().as_secs_f64() * 1e3;
+                let img = renderer.read_back()?;
+                let r = renderer.report();
+                self.report.mesh_ms = Some(mesh_ms);
+                self.report.triangles = Some(r.triangles);
+                self.report.bytes_uploaded = Some(r.bytes_uploaded);
+                self.report.draw_calls = Some(r.draw_calls);
+                self.report.passes = r
+                    .passes
+                    .iter()
+                    .map(|p| PassLine {
+                        pass: p.name.clone(),
+                        ms: p.ms,
+                    })
+                    .collect();
+                self.report.gpu_ms =
+                    (!r.passes.is_empty()).then(|| r.passes.iter().map(|p| p.ms).sum());
+                Ok((img, stats))
+            }
+        }
+    }
+}
