@@ -2,9 +2,6 @@
 //! `--backend cpu|gpu|auto`. Both draw the same frame description
 //! (`ghost_raytrace::ghosts::draw_into`); tracing and meshing stay on the CPU either way.
 
-use std::sync::Arc;
-use std::time::Instant;
-
 use flarebench_sdk::LensSystem;
 use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::frame::Frame;
@@ -232,7 +229,7 @@ impl GhostBackend {
             }
             #[cfg(feature = "gpu")]
             Active::Gpu(renderer) => {
-                let t = Instant::now();
+                let t = std::time::Instant::now();
                 let stats =
                     ghosts::draw_into(system, aperture, frame, plans, options, renderer.as_mut())?;
                 let mesh_ms = t.elapsed().as_secs_f64() * 1e3;
