@@ -159,7 +159,7 @@ impl GhostBackend {
                             software_adapter: r.software,
                             ..BackendReport::default()
                         };
-                        let renderer = GhostRenderer::new(Arc::new(ctx));
+                        let renderer = GhostRenderer::new(std::sync::Arc::new(ctx));
                         Ok(GhostBackend {
                             active: Active::Gpu(Box::new(renderer)),
                             report,
