@@ -33,11 +33,11 @@ pub use cache::StarburstCache;
 pub use chief_ray::{ChiefRayError, chief_ray_landing};
 pub use lights::{
     FLUX_LAMBDA_NM, StarburstLens, StarburstLight, StarburstOutcome, StarburstSource,
-    StarburstTarget,
+    StarburstSplat, StarburstTarget,
 };
 pub use pattern::{StarburstPattern, TAPER_START, edge_window};
 pub use power::PowerSpectrum;
-pub use splat::{SplatStats, add_starburst};
+pub use splat::{SplatGeometry, SplatStats, add_starburst, splat_stats};
 
 use crate::aperture::ApertureError;
 use crate::color::SpectralSamplingError;

@@ -11,7 +11,7 @@ use flarebench_sdk::image::HdrImage;
 use flarebench_sdk::paraxial::analyse;
 use flarebench_sdk::starburst::{
     PowerSpectrum, StarburstCache, StarburstPattern, StarburstSettings, TAPER_START, add_starburst,
-    chief_ray_landing, edge_window,
+    chief_ray_landing, edge_window, splat_stats,
 };
 use flarebench_test_support::load_lens;
 
@@ -430,6 +430,14 @@ fn adding_to_an_image_keeps_the_energy_in_the_frame() {
     let st = add_starburst(&mut img, &frame, &p, [x_left, 0.0], f_number, flux).unwrap();
     let kept = img.luminance_sum();
     assert!((kept / st.added - 1.0).abs() < SPLAT_ENERGY_REL_TOL);
+    // What the splat adds is known without drawing it (the GPU backend's report).
+    let known = splat_stats(&frame, &p, [x_left, 0.0], f_number, flux).unwrap();
+    assert!(
+        (known.added / st.added - 1.0).abs() < 1e-9,
+        "{known:?} against {st:?}"
+    );
+    assert!((known.outside / st.outside - 1.0).abs() < 1e-9);
+    assert_eq!(known.reach_px, st.reach_px);
     assert!(((kept + st.outside) / total - 1.0).abs() < SPLAT_ENERGY_REL_TOL);
     assert!(
         (kept / total - 0.5).abs() < HALF_KEPT_TOL,

@@ -93,9 +93,7 @@ impl BackendReport {
                 }
             );
         }
-        if let Some(n) = &self.note {
-            s += &format!(" ({n})");
-        }
+        // (Why `auto` chose the CPU is in the JSON report: it depends on the machine.)
         s += "\n";
         if let (Some(mesh), Some(t)) = (self.mesh_ms, self.triangles) {
             s += &format!(
@@ -166,7 +164,16 @@ impl GhostBackend {
                         })
                     }
                     Err(e) if choice == BackendChoice::Auto => {
-                        Ok(GhostBackend::cpu(Some(format!("auto: {e}"))))
+                        let why = match e {
+                            flarebench_gpu::GpuError::SoftwareOnly { name, .. } => {
+                                format!("auto: no hardware GPU, only the software adapter {name}")
+                            }
+                            flarebench_gpu::GpuError::NoAdapter { .. } => {
+                                "auto: no GPU adapter".to_string()
+                            }
+                            e => format!("auto: {e}"),
+                        };
+                        Ok(GhostBackend::cpu(Some(why)))
                     }
                     Err(e) => Err(anyhow::Error::new(e).context("--backend gpu")),
                 }

@@ -9,6 +9,8 @@
 //! ([`add_starburst`]). A light whose chief ray is lost, or whose pattern cannot reach the
 //! frame (it reaches ±texels·λ·N/2 for λ up to 780 nm), draws nothing.
 
+use std::sync::Arc;
+
 use crate::LensSystem;
 use crate::aperture::{Aperture, ApertureMask};
 use crate::color::LightSpectrum;
@@ -21,7 +23,8 @@ use crate::spectrum::LAMBDA_D_NM;
 use crate::trace::InterfaceTableSet;
 
 use super::{
-    SplatStats, StarburstCache, StarburstError, StarburstSettings, add_starburst, chief_ray_landing,
+    SplatStats, StarburstCache, StarburstError, StarburstPattern, StarburstSettings, add_starburst,
+    chief_ray_landing,
 };
 
 /// Wavelength of the direct-flux figure (nm): the ghost planner's bounds wavelength.
@@ -57,6 +60,17 @@ pub struct StarburstTarget<'a> {
     pub frame: &'a Frame,
 }
 
+/// A starburst ready to draw: its pattern, centred at a sensor point, scaled for an f-number,
+/// times a flux ([`add_starburst`]'s arguments).
+#[derive(Clone, Debug)]
+pub struct StarburstSplat {
+    pub pattern: Arc<StarburstPattern>,
+    /// Where the chief ray lands (sensor mm, lens frame).
+    pub centre_mm: [f64; 2],
+    pub f_number: f64,
+    pub flux: f64,
+}
+
 /// What happened to one light's starburst.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct StarburstOutcome {
@@ -85,18 +99,19 @@ impl StarburstLens {
         })
     }
 
-    /// Adds the starburst of `light` through `system` (the lens this was prepared for) to
-    /// `target`'s image.
-    pub fn add(
+    /// Where the starburst of `light` through `system` (the lens this was prepared for) lands
+    /// on `frame`, and its pattern — without drawing it (`outcome.drawn` is `None`): the
+    /// splat, or `None` for a light whose chief ray is lost or whose pattern cannot reach the
+    /// frame. [`Self::add`] draws it on the CPU; the GPU backend composites it itself.
+    pub fn place(
         &self,
         system: &LensSystem,
-        target: &mut StarburstTarget<'_>,
+        frame: &Frame,
         light: &StarburstLight,
         source: &StarburstSource<'_>,
         cache: &mut StarburstCache,
         scratch: &mut GridTrace,
-    ) -> Result<StarburstOutcome, StarburstError> {
-        let frame = target.frame;
+    ) -> Result<(StarburstOutcome, Option<StarburstSplat>), StarburstError> {
         let theta = light.theta_deg.to_radians();
         let phi = light.phi_deg.to_radians();
         let flux = light.intensity * direct_flux(system, &self.tables, theta, scratch);
@@ -106,14 +121,14 @@ impl StarburstLens {
             drawn: None,
         };
         let Ok(centre) = chief_ray_landing(system, LAMBDA_D_NM, theta, phi) else {
-            return Ok(outcome);
+            return Ok((outcome, None));
         };
         outcome.centre_mm = Some(centre);
         let reach_mm =
             source.settings.pupil_texels as f64 * LONGEST_NM * 1e-6 * self.f_number / 2.0;
         let (hw, hh) = (0.5 * frame.film_width_mm, 0.5 * frame.film_height_mm);
         if centre[0].abs() > hw + reach_mm || centre[1].abs() > hh + reach_mm {
-            return Ok(outcome);
+            return Ok((outcome, None));
         }
         let pattern = cache.pattern(
             source.aperture,
@@ -121,14 +136,38 @@ impl StarburstLens {
             &source.settings,
             light.spectrum,
         )?;
-        outcome.drawn = Some(add_starburst(
-            target.img,
-            frame,
-            &pattern,
-            centre,
-            self.f_number,
+        let splat = StarburstSplat {
+            pattern,
+            centre_mm: centre,
+            f_number: self.f_number,
             flux,
-        )?);
+        };
+        Ok((outcome, Some(splat)))
+    }
+
+    /// Adds the starburst of `light` through `system` (the lens this was prepared for) to
+    /// `target`'s image ([`Self::place`], then [`add_starburst`]).
+    pub fn add(
+        &self,
+        system: &LensSystem,
+        target: &mut StarburstTarget<'_>,
+        light: &StarburstLight,
+        source: &StarburstSource<'_>,
+        cache: &mut StarburstCache,
+        scratch: &mut GridTrace,
+    ) -> Result<StarburstOutcome, StarburstError> {
+        let (mut outcome, splat) =
+            self.place(system, target.frame, light, source, cache, scratch)?;
+        if let Some(sp) = splat {
+            outcome.drawn = Some(add_starburst(
+                target.img,
+                target.frame,
+                &sp.pattern,
+                sp.centre_mm,
+                sp.f_number,
+                sp.flux,
+            )?);
+        }
         Ok(outcome)
     }
 }

@@ -39,23 +39,14 @@ pub fn add_starburst(
     f_number: f64,
     flux: f64,
 ) -> Result<SplatStats, StarburstError> {
-    if !(f_number > 0.0 && f_number.is_finite()) {
-        return Err(StarburstError::FNumber(f_number));
-    }
-    let p = pattern.size();
-    let b = pattern.bin_mm(f_number);
-    let half = (p / 2) as f64;
-    let px_w = frame.film_width_mm / frame.width as f64;
-    let px_h = frame.film_height_mm / frame.height as f64;
-    // Pixel coordinate of bin i's lower sensor edge, and the step per bin (signed): x maps
-    // to the left, y downward (Frame::to_pixel).
-    let [cx, cy] = frame.to_pixel(centre_mm[0], centre_mm[1]).map(f64::from);
-    let x_edges = Axis::new(cx - (-half - 0.5) * b / px_w, -b / px_w, p, frame.width);
-    let y_edges = Axis::new(cy + (-half - 0.5) * b / px_h, b / px_h, p, frame.height);
+    let g = SplatGeometry::new(frame, pattern, centre_mm, f_number)?;
+    let p = g.size;
+    let x_edges = Axis::new(g.first[0], g.step[0], p, frame.width);
+    let y_edges = Axis::new(g.first[1], g.step[1], p, frame.height);
     let lum = |v: [f64; 3]| 0.2126 * v[0] + 0.7152 * v[1] + 0.0722 * v[2];
     let total = lum(pattern.sum()) * flux;
     let mut stats = SplatStats {
-        reach_px: half * b / px_w.min(px_h),
+        reach_px: g.reach_px,
         ..SplatStats::default()
     };
     if x_edges.span.is_none() || y_edges.span.is_none() {
@@ -100,6 +91,94 @@ pub fn add_starburst(
     stats.added = lum(added);
     stats.outside = (total - stats.added).max(0.0);
     Ok(stats)
+}
+
+/// Where a pattern's bins land on a frame's pixels: bin `(i, j)` covers pixel coordinates
+/// `first[0] + i·step[0]` to `first[0] + (i + 1)·step[0]` along x (a negative step: x maps
+/// to the left), and likewise along y (module docs). The CPU splat and the GPU backend's
+/// starburst pass share it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SplatGeometry {
+    /// Bins per side.
+    pub size: usize,
+    /// Pixel coordinate of bin 0's first edge, per axis.
+    pub first: [f64; 2],
+    /// Signed pixels per bin, per axis.
+    pub step: [f64; 2],
+    /// How far the pattern reaches from its centre (pixels, along the wider pixel side).
+    pub reach_px: f64,
+}
+
+impl SplatGeometry {
+    /// The geometry of `pattern` centred at sensor point `centre_mm` at f-number `f_number`.
+    pub fn new(
+        frame: &Frame,
+        pattern: &StarburstPattern,
+        centre_mm: [f64; 2],
+        f_number: f64,
+    ) -> Result<SplatGeometry, StarburstError> {
+        if !(f_number > 0.0 && f_number.is_finite()) {
+            return Err(StarburstError::FNumber(f_number));
+        }
+        let p = pattern.size();
+        let b = pattern.bin_mm(f_number);
+        let half = (p / 2) as f64;
+        let px_w = frame.film_width_mm / frame.width as f64;
+        let px_h = frame.film_height_mm / frame.height as f64;
+        let [cx, cy] = frame.to_pixel(centre_mm[0], centre_mm[1]).map(f64::from);
+        Ok(SplatGeometry {
+            size: p,
+            first: [cx - (-half - 0.5) * b / px_w, cy + (-half - 0.5) * b / px_h],
+            step: [-b / px_w, b / px_h],
+            reach_px: half * b / px_w.min(px_h),
+        })
+    }
+}
+
+/// What [`add_starburst`] would add, without drawing: the luminance that lands in the frame
+/// and the part outside it (for a backend that draws the pattern itself).
+pub fn splat_stats(
+    frame: &Frame,
+    pattern: &StarburstPattern,
+    centre_mm: [f64; 2],
+    f_number: f64,
+    flux: f64,
+) -> Result<SplatStats, StarburstError> {
+    let g = SplatGeometry::new(frame, pattern, centre_mm, f_number)?;
+    let p = g.size;
+    let share = |axis: &Axis| -> Vec<f64> {
+        (0..p)
+            .map(|i| {
+                axis.weights[axis.start[i]..axis.start[i + 1]]
+                    .iter()
+                    .map(|w| w.1)
+                    .sum()
+            })
+            .collect()
+    };
+    let fx = share(&Axis::new(g.first[0], g.step[0], p, frame.width));
+    let fy = share(&Axis::new(g.first[1], g.step[1], p, frame.height));
+    let lum = |v: [f32; 3]| {
+        0.2126 * f64::from(v[0]) + 0.7152 * f64::from(v[1]) + 0.0722 * f64::from(v[2])
+    };
+    let total = {
+        let s = pattern.sum();
+        (0.2126 * s[0] + 0.7152 * s[1] + 0.0722 * s[2]) * flux
+    };
+    let mut added = 0.0;
+    for (j, row) in pattern.rgb().chunks_exact(p).enumerate() {
+        if fy[j] == 0.0 {
+            continue;
+        }
+        let r: f64 = row.iter().zip(&fx).map(|(v, f)| f * lum(*v)).sum();
+        added += fy[j] * r;
+    }
+    added *= flux;
+    Ok(SplatStats {
+        added,
+        outside: (total - added).max(0.0),
+        reach_px: g.reach_px,
+    })
 }
 
 /// The overlap weights of one axis: bin `i` spreads over pixels
