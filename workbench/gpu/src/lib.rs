@@ -6,9 +6,11 @@
 //! - [`device`]: finding an adapter, opening the device, its errors kept per frame.
 //! - [`renderer`]: [`GhostRenderer`], the ghost meshes drawn level by level.
 //! - `pipelines`, `targets`, `buffers`, `uniforms`, `timing`: what the renderer is made of.
-//! - `shaders/`: the WGSL (aperture, rasterizer, upsampling).
+//! - [`compose`]: starbursts composited from their patterns, and the tone-mapping pass.
+//! - `shaders/`: the WGSL (aperture, rasterizer, upsampling, starburst, tone mapping).
 
 mod buffers;
+pub mod compose;
 pub mod device;
 mod error;
 mod pipelines;
@@ -17,6 +19,7 @@ mod targets;
 mod timing;
 mod uniforms;
 
+pub use compose::ToneCurve;
 pub use device::{AdapterChoice, AdapterReport, GpuContext};
 pub use error::GpuError;
 pub use renderer::{FrameReport, GhostRenderer};

@@ -86,7 +86,7 @@ fn uniform_entry(
 }
 
 /// Additive blending of colour; alpha is kept at 0.
-const ADD: wgpu::BlendState = wgpu::BlendState {
+pub const ADD: wgpu::BlendState = wgpu::BlendState {
     color: wgpu::BlendComponent {
         src_factor: wgpu::BlendFactor::One,
         dst_factor: wgpu::BlendFactor::One,

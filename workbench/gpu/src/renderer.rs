@@ -10,8 +10,10 @@ use flarebench_sdk::frame::Frame;
 use flarebench_sdk::ghost::mesh::{GhostMesh, Mesh, SAMPLED_MIN_AREA};
 use flarebench_sdk::ghost::sink::{FrameLevels, GhostSink};
 use flarebench_sdk::image::{CoarseGrid, HdrImage};
+use flarebench_sdk::starburst::StarburstSplat;
 
 use crate::buffers::GrowBuffer;
+use crate::compose::{Compositor, ToneCurve};
 use crate::pipelines::{Kind, Pipelines};
 use crate::targets::{LevelTargets, TARGET_FORMAT};
 use crate::timing::{PassTimer, PassTiming};
@@ -81,6 +83,7 @@ pub struct FrameReport {
 pub struct GhostRenderer {
     ctx: Arc<GpuContext>,
     pipelines: Pipelines,
+    compositor: Compositor,
     kinds: [KindBuffers; 3],
     fringe_tables: GrowBuffer,
     level_blocks: GrowBuffer,
@@ -109,6 +112,7 @@ impl GhostRenderer {
         let uniform = wgpu::BufferUsages::UNIFORM;
         GhostRenderer {
             pipelines: Pipelines::new(device),
+            compositor: Compositor::new(device),
             kinds: [Kind::Open, Kind::Edge, Kind::Fringe].map(|k| KindBuffers::new(device, k)),
             fringe_tables: GrowBuffer::new(device, "fringe tables", storage),
             level_blocks: GrowBuffer::new(device, "level blocks", uniform),
@@ -172,6 +176,52 @@ impl GhostRenderer {
         }
         self.ctx.check()?;
         Ok(image)
+    }
+
+    /// Adds the starbursts `splats` to the last frame's output (after its ghosts, before
+    /// [`Self::read_back`]); patterns already on the GPU are not uploaded again.
+    pub fn add_starbursts(&mut self, splats: &[StarburstSplat]) -> Result<(), GpuError> {
+        self.take_error()?;
+        let Some(frame) = self.frame else {
+            return Ok(());
+        };
+        let Some(output) = self.targets.output_view() else {
+            return Ok(());
+        };
+        let timestamps = self
+            .timer
+            .as_mut()
+            .and_then(|t| t.pass("starbursts".to_string()));
+        let bytes = self
+            .compositor
+            .add_starbursts(&self.ctx, output, &frame, splats, timestamps)?;
+        self.report.bytes_uploaded += bytes;
+        if let Some(timer) = &self.timer {
+            let mut encoder =
+                self.ctx
+                    .device
+                    .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                        label: Some("times"),
+                    });
+            timer.resolve(&mut encoder);
+            self.ctx.queue.submit([encoder.finish()]);
+        }
+        self.ctx.check()
+    }
+
+    /// The last frame's output tone mapped to 8-bit sRGB (exposure `exposure_ev` stops, then
+    /// `curve`), read back as RGB bytes, row-major: the PNG writer's mapping, on the GPU.
+    pub fn tone_map(&mut self, exposure_ev: f32, curve: ToneCurve) -> Result<Vec<u8>, GpuError> {
+        self.take_error()?;
+        let Some(frame) = self.frame else {
+            return Ok(Vec::new());
+        };
+        let Some(output) = self.targets.output_view() else {
+            return Ok(Vec::new());
+        };
+        let size = (frame.width as u32, frame.height as u32);
+        self.compositor
+            .tone_map(&self.ctx, output, size, exposure_ev, curve)
     }
 
     fn fail(&mut self, e: GpuError) {

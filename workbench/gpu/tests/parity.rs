@@ -132,3 +132,79 @@ fn nikon_band_by_band_two_lights() {
         &record("nikon-zoom-short", &["10,30"], &olf_mask(), true),
     );
 }
+
+/// Starbursts composited on the GPU from the patterns the CPU splats: two lights in the frame
+/// (one pattern shared, one of its own colour), added after the ghosts.
+#[test]
+fn heliar_with_starbursts() {
+    use flarebench_sdk::ghost::GridTrace;
+    use flarebench_sdk::starburst::{
+        StarburstCache, StarburstLens, StarburstLight, StarburstSettings, StarburstSource,
+        add_starburst,
+    };
+    let sys = load_lens("heliar-tronnier");
+    let lights = ["8,60", "3,200,0.5,3200"];
+    let recorded = record("heliar-tronnier", &lights, &Aperture::Circular, true);
+    let (frame, _, _) = recorded.levels.clone().unwrap();
+    let lens = StarburstLens::new(&sys).unwrap();
+    let aperture = Aperture::Circular;
+    let source = StarburstSource {
+        aperture: &aperture,
+        dust: None,
+        settings: StarburstSettings {
+            pupil_texels: 128,
+            ..StarburstSettings::default()
+        },
+    };
+    let mut cache = StarburstCache::new();
+    let mut scratch = GridTrace::default();
+    let splats: Vec<_> = lights
+        .iter()
+        .filter_map(|l| {
+            let spec = LightSpec::parse(l).unwrap();
+            let light = StarburstLight {
+                theta_deg: spec.theta_deg,
+                phi_deg: spec.phi_deg,
+                intensity: spec.intensity,
+                spectrum: spec.spectrum,
+            };
+            lens.place(&sys, &frame, &light, &source, &mut cache, &mut scratch)
+                .unwrap()
+                .1
+        })
+        .collect();
+    assert_eq!(splats.len(), 2, "both lights are in the frame");
+    let mut cpu = recorded.draw_cpu();
+    let ghosts_only = cpu.luminance_sum();
+    for s in &splats {
+        add_starburst(
+            &mut cpu,
+            &frame,
+            &s.pattern,
+            s.centre_mm,
+            s.f_number,
+            s.flux,
+        )
+        .unwrap();
+    }
+    assert!(
+        cpu.luminance_sum() > 2.0 * ghosts_only,
+        "the starbursts dominate"
+    );
+    let mut gpu = GhostRenderer::new(context());
+    recorded.replay(&mut gpu);
+    gpu.add_starbursts(&splats).unwrap();
+    let img = gpu.read_back().unwrap();
+    assert!(!img.has_non_finite());
+    let c = img.compare(&cpu).unwrap();
+    eprintln!(
+        "heliar with starbursts: rmse {:.2e}, energy {:.2e}",
+        c.relative_rmse, c.energy_error
+    );
+    assert!(c.relative_rmse <= MAX_RMSE, "rmse {}", c.relative_rmse);
+    assert!(
+        c.energy_error.abs() <= MAX_ENERGY,
+        "energy {}",
+        c.energy_error
+    );
+}
