@@ -8,7 +8,12 @@ use flarebench_sdk::frame::Frame;
 use flarebench_sdk::ghost::context::GhostStats;
 use flarebench_sdk::image::HdrImage;
 use ghost_raytrace::ghosts::{self, RenderOptions, RenderScratch};
+use flarebench_sdk::starburst::StarburstCache;
 use ghost_raytrace::plan::LightPlan;
+use ghost_raytrace::scene::LightSpec;
+
+use crate::compose::{StarburstLine, StarburstSetup};
+use crate::output::ToneMap;
 use serde::Serialize;
 
 /// The `--backend` choice.
@@ -78,6 +83,21 @@ pub struct PassLine {
 }
 
 impl BackendReport {
+    /// The GPU frame's pass times and uploads so far.
+    #[cfg(feature = "gpu")]
+    fn take_passes(&mut self, r: &flarebench_gpu::FrameReport) {
+        self.bytes_uploaded = Some(r.bytes_uploaded);
+        self.passes = r
+            .passes
+            .iter()
+            .map(|p| PassLine {
+                pass: p.name.clone(),
+                ms: p.ms,
+            })
+            .collect();
+        self.gpu_ms = (!r.passes.is_empty()).then(|| r.passes.iter().map(|p| p.ms).sum());
+    }
+
     /// One line of text for `--report`.
     pub fn text(&self) -> String {
         let mut s = format!("backend: {}", self.backend);
@@ -208,6 +228,52 @@ impl GhostBackend {
     /// What the last frame was drawn with and cost.
     pub fn report(&self) -> &BackendReport {
         &self.report
+    }
+
+    /// Adds the starbursts of `lights` to `img`, this frame's ghosts just rendered: on the CPU
+    /// by splatting into it; on the GPU composited onto the frame's output from their
+    /// patterns (kept there from frame to frame), `img` then read back from it.
+    pub fn add_starbursts(
+        &mut self,
+        img: &mut HdrImage,
+        system: &LensSystem,
+        frame: &Frame,
+        lights: &[LightSpec],
+        setup: &StarburstSetup<'_>,
+        cache: &mut StarburstCache,
+    ) -> anyhow::Result<Vec<StarburstLine>> {
+        match &mut self.active {
+            Active::Cpu(_) => crate::compose::add_starbursts(img, system, frame, lights, setup, cache),
+            #[cfg(feature = "gpu")]
+            Active::Gpu(renderer) => {
+                let (lines, splats) =
+                    crate::compose::place_starbursts(system, frame, lights, setup, cache)?;
+                renderer.add_starbursts(&splats)?;
+                *img = renderer.read_back()?;
+                self.report.take_passes(renderer.report());
+                Ok(lines)
+            }
+        }
+    }
+
+    /// The frame's image as 8-bit sRGB by the backend's own tone pass — the GPU's, of its
+    /// output as it stands (ghosts and starbursts, no background); `None` on the CPU, where
+    /// the PNG writer maps the image.
+    pub fn tone_map(&mut self, tone: &ToneMap) -> anyhow::Result<Option<Vec<u8>>> {
+        match &mut self.active {
+            Active::Cpu(_) => {
+                let _ = tone;
+                Ok(None)
+            }
+            #[cfg(feature = "gpu")]
+            Active::Gpu(renderer) => {
+                let curve = match tone.operator {
+                    crate::output::ToneOperator::Aces => flarebench_gpu::ToneCurve::Aces,
+                    crate::output::ToneOperator::Clamp => flarebench_gpu::ToneCurve::Clamp,
+                };
+                Ok(Some(renderer.tone_map(tone.exposure_ev, curve)?))
+            }
+        }
     }
 
     /// Draws every planned ghost into a new image of the frame's size; per light, each

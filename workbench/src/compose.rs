@@ -16,7 +16,8 @@ use flarebench_sdk::frame::Frame;
 use flarebench_sdk::ghost::GridTrace;
 use flarebench_sdk::image::HdrImage;
 use flarebench_sdk::starburst::{
-    StarburstCache, StarburstLens, StarburstLight, StarburstSource, StarburstTarget,
+    StarburstCache, StarburstLens, StarburstLight, StarburstOutcome, StarburstSource,
+    StarburstSplat, StarburstTarget, splat_stats,
 };
 use ghost_raytrace::scene::LightSpec;
 use serde::Serialize;
@@ -57,34 +58,80 @@ pub fn add_starbursts(
     let mut lines = Vec::with_capacity(lights.len());
     let mut target = StarburstTarget { img, frame };
     for (k, light) in lights.iter().enumerate() {
-        let sl = StarburstLight {
-            theta_deg: light.theta_deg,
-            phi_deg: light.phi_deg,
-            intensity: light.intensity,
-            spectrum: light.spectrum,
-        };
         let o = lens
-            .add(system, &mut target, &sl, setup, cache, &mut scratch)
+            .add(
+                system,
+                &mut target,
+                &starburst_light(light),
+                setup,
+                cache,
+                &mut scratch,
+            )
             .context("starburst")?;
-        let position_px = o
-            .centre_mm
-            .map(|c| frame.to_pixel(c[0], c[1]).map(f64::from));
-        let (added, outside, reach_px, left_out) = match (o.drawn, o.centre_mm) {
-            (Some(st), _) => (st.added, st.outside, st.reach_px, None),
-            (None, Some(_)) => (0.0, o.flux, 0.0, Some("off frame".to_string())),
-            (None, None) => (0.0, 0.0, 0.0, Some("chief ray lost".to_string())),
-        };
-        lines.push(StarburstLine {
-            light: k,
-            position_px,
-            flux: o.flux,
-            added,
-            outside,
-            reach_px,
-            left_out,
-        });
+        lines.push(line(k, frame, &o));
     }
     Ok(lines)
+}
+
+/// The starburst of every light placed on `frame` but not drawn (a backend that composites
+/// the patterns itself, the GPU's): each light's report line — what would be added, from
+/// `flarebench_sdk::starburst::splat_stats` — and the splats to draw.
+pub fn place_starbursts(
+    system: &LensSystem,
+    frame: &Frame,
+    lights: &[LightSpec],
+    setup: &StarburstSetup<'_>,
+    cache: &mut StarburstCache,
+) -> Result<(Vec<StarburstLine>, Vec<StarburstSplat>)> {
+    let lens = StarburstLens::new(system).context("paraxial analysis")?;
+    let mut scratch = GridTrace::default();
+    let mut lines = Vec::with_capacity(lights.len());
+    let mut splats = Vec::with_capacity(lights.len());
+    for (k, light) in lights.iter().enumerate() {
+        let sl = starburst_light(light);
+        let (mut o, splat) = lens
+            .place(system, frame, &sl, setup, cache, &mut scratch)
+            .context("starburst")?;
+        if let Some(sp) = splat {
+            o.drawn = Some(
+                splat_stats(frame, &sp.pattern, sp.centre_mm, sp.f_number, sp.flux)
+                    .context("starburst")?,
+            );
+            splats.push(sp);
+        }
+        lines.push(line(k, frame, &o));
+    }
+    Ok((lines, splats))
+}
+
+fn starburst_light(light: &LightSpec) -> StarburstLight {
+    StarburstLight {
+        theta_deg: light.theta_deg,
+        phi_deg: light.phi_deg,
+        intensity: light.intensity,
+        spectrum: light.spectrum,
+    }
+}
+
+/// The report line of light `k`'s starburst.
+fn line(k: usize, frame: &Frame, o: &StarburstOutcome) -> StarburstLine {
+    let position_px = o
+        .centre_mm
+        .map(|c| frame.to_pixel(c[0], c[1]).map(f64::from));
+    let (added, outside, reach_px, left_out) = match (o.drawn, o.centre_mm) {
+        (Some(st), _) => (st.added, st.outside, st.reach_px, None),
+        (None, Some(_)) => (0.0, o.flux, 0.0, Some("off frame".to_string())),
+        (None, None) => (0.0, 0.0, 0.0, Some("chief ray lost".to_string())),
+    };
+    StarburstLine {
+        light: k,
+        position_px,
+        flux: o.flux,
+        added,
+        outside,
+        reach_px,
+        left_out,
+    }
 }
 
 /// Adds `flare` onto `background` (same size) in linear light.

@@ -188,6 +188,18 @@ pub fn encode_exr_half(img: &HdrImage) -> Result<Vec<u8>> {
     Ok(bytes.into_inner())
 }
 
+/// Saves 8-bit sRGB pixels already tone mapped (RGB, row-major: the GPU backend's tone pass)
+/// as a PNG, atomically.
+pub fn save_png_rgb8(rgb: Vec<u8>, width: usize, height: usize, path: &Path) -> Result<()> {
+    let img = image::RgbImage::from_raw(width as u32, height as u32, rgb)
+        .context("pixel buffer does not match the image size")?;
+    let mut bytes = Cursor::new(Vec::new());
+    img.write_to(&mut bytes, image::ImageFormat::Png)
+        .context("PNG encoder")?;
+    write_atomically(path, bytes.get_ref())
+        .with_context(|| format!("could not write `{}`", path.display()))
+}
+
 /// The image tone mapped to an 8-bit sRGB PNG in memory.
 pub fn encode_png(img: &HdrImage, tone: &ToneMap) -> Result<Vec<u8>> {
     check_size(img)?;

@@ -16,10 +16,12 @@ use ghost_raytrace::{ghosts, plan};
 
 use crate::aperture_file::{MaskEncoding, load_aperture_mask};
 use crate::backend::{BackendChoice, GhostBackend};
-use crate::compose::{StarburstSetup, add_onto, add_starbursts};
+use crate::compose::{StarburstSetup, add_onto};
 use crate::input_image::read_input_image;
 use crate::lens_library;
-use crate::output::{ExrPrecision, ToneMap, ToneOperator, save_image_as};
+use crate::output::{
+    ExrPrecision, OutputFormat, ToneMap, ToneOperator, save_image_as, save_png_rgb8,
+};
 use crate::precomputed::load_precomputed;
 use crate::reference_file::{ReferenceSource, reference_for};
 use crate::report::{ErrorReport, LightReport, RenderReport, Timings};
@@ -411,7 +413,7 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
             settings: starburst_settings,
         };
         let mut cache = StarburstCache::new();
-        add_starbursts(&mut img, sys, &frame, &lights, &setup, &mut cache)?
+        backend.add_starbursts(&mut img, sys, &frame, &lights, &setup, &mut cache)?
     };
     timings.starburst_ms = ms(t);
 
@@ -439,11 +441,17 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
     };
     let flare_sum = img.sum();
     let flare_max = img.max();
-    let out = match &background {
-        Some(bg) => add_onto(bg, &img)?,
-        None => img,
+    // With the GPU backend a PNG of the flare alone is tone mapped there, in a last pass.
+    let gpu_png = if background.is_none() && OutputFormat::from_path(&args.output)? == OutputFormat::Png {
+        backend.tone_map(&tone)?
+    } else {
+        None
     };
-    save_image_as(&out, &args.output, &tone, precision)?;
+    match (gpu_png, &background) {
+        (Some(rgb), _) => save_png_rgb8(rgb, w, h, &args.output)?,
+        (None, Some(bg)) => save_image_as(&add_onto(bg, &img)?, &args.output, &tone, precision)?,
+        (None, None) => save_image_as(&img, &args.output, &tone, precision)?,
+    }
     timings.write_ms = ms(t);
 
     let lights: Vec<LightReport> = plans

@@ -1,0 +1,138 @@
+//! `--backend gpu` end to end, on whatever adapter the machine has (Mesa lavapipe in CI, with
+//! `WGPU_BACKEND=vulkan`): the image equals the CPU backend's, the report names the adapter
+//! and its pass times, and without an adapter `gpu` fails saying what to install while `auto`
+//! renders on the CPU.
+
+mod common;
+
+use common::{flarebench, json, temp_dir};
+use flarebench::output::read_exr;
+
+/// Relative RMSE and energy of the GPU image against the CPU image (the bounds).
+const MAX_RMSE: f64 = 0.005;
+const MAX_ENERGY: f64 = 0.001;
+/// 8-bit channels the GPU's tone pass may put more than one level away from the PNG
+/// writer's (the linear images differ within `MAX_RMSE`; the sRGB curve is steep near black).
+const MAX_FAR_CHANNELS: f64 = 0.002;
+
+fn render(backend: &str, out: &std::path::Path, extra: &[&str]) -> serde_json::Value {
+    let mut args = vec![
+        "render",
+        "heliar-tronnier",
+        "--light",
+        "8,60",
+        "--light",
+        "3,200,0.5,3200",
+        "--size",
+        "480x270",
+        "--starburst-texels",
+        "128",
+        "--backend",
+        backend,
+        "-o",
+        out.to_str().unwrap(),
+        "--json",
+    ];
+    args.extend_from_slice(extra);
+    json(&args)
+}
+
+#[test]
+fn the_gpu_renders_the_cpu_image_and_reports_its_adapter() {
+    let tmp = temp_dir("gpu");
+    for extra in [&[][..], &["--band-by-band"][..], &["--iris-blades", "6"][..]] {
+        let (cpu_path, gpu_path) = (tmp.path().join("cpu.exr"), tmp.path().join("gpu.exr"));
+        let cpu_report = render("cpu", &cpu_path, extra);
+        let report = render("gpu", &gpu_path, extra);
+        assert_eq!(cpu_report["backend"]["backend"], "cpu");
+        let b = &report["backend"];
+        assert_eq!(b["backend"], "gpu", "{b}");
+        assert!(!b["adapter"].as_str().unwrap().is_empty());
+        assert!(b["triangles"].as_array().is_some());
+        assert!(b["bytes_uploaded"].as_u64().unwrap() > 0);
+        let (cpu, gpu) = (read_exr(&cpu_path).unwrap(), read_exr(&gpu_path).unwrap());
+        assert!(!gpu.has_non_finite());
+        let c = gpu.compare(&cpu).unwrap();
+        eprintln!("{extra:?}: rmse {:.2e}, energy {:.2e}", c.relative_rmse, c.energy_error);
+        assert!(c.relative_rmse <= MAX_RMSE, "{extra:?}: rmse {}", c.relative_rmse);
+        assert!(c.energy_error.abs() <= MAX_ENERGY, "{extra:?}: energy {}", c.energy_error);
+        // Both lights' starbursts are drawn, and reported alike.
+        for k in 0..2 {
+            let (a, b) = (&report["starbursts"][k], &cpu_report["starbursts"][k]);
+            assert!(a["left_out"].is_null());
+            let (x, y) = (a["added"].as_f64().unwrap(), b["added"].as_f64().unwrap());
+            assert!((x / y - 1.0).abs() < 1e-9, "starburst {k}: {x} against {y}");
+        }
+    }
+}
+
+#[test]
+fn the_gpu_tone_pass_maps_as_the_png_writer() {
+    let tmp = temp_dir("gpu-png");
+    let (cpu_path, gpu_path) = (tmp.path().join("cpu.png"), tmp.path().join("gpu.png"));
+    for tone in ["aces", "clamp"] {
+        let extra = ["--exposure-ev", "4", "--tone", tone];
+        render("cpu", &cpu_path, &extra);
+        render("gpu", &gpu_path, &extra);
+        let cpu = image::open(&cpu_path).unwrap().to_rgb8();
+        let gpu = image::open(&gpu_path).unwrap().to_rgb8();
+        assert_eq!(cpu.dimensions(), gpu.dimensions());
+        let far = cpu
+            .as_raw()
+            .iter()
+            .zip(gpu.as_raw())
+            .filter(|(a, b)| a.abs_diff(**b) > 1)
+            .count();
+        let lit = cpu.as_raw().iter().filter(|&&v| v > 0).count();
+        assert!(lit > cpu.as_raw().len() / 2, "{tone}: the frame is mostly lit");
+        let share = far as f64 / cpu.as_raw().len() as f64;
+        eprintln!("{tone}: {far} channels more than one level apart ({share:.2e})");
+        assert!(share <= MAX_FAR_CHANNELS, "{tone}: {share}");
+    }
+}
+
+#[test]
+fn without_an_adapter_gpu_says_what_to_install_and_auto_uses_the_cpu() {
+    let tmp = temp_dir("gpu-none");
+    let out = tmp.path().join("x.exr");
+    let out = out.to_str().unwrap();
+    let args = [
+        "render",
+        "heliar-tronnier",
+        "--light",
+        "8,60",
+        "--size",
+        "96x54",
+        "-o",
+        out,
+    ];
+    // No Metal on Linux, no Vulkan on macOS: with the other one asked for, no adapter.
+    let other = if cfg!(target_os = "macos") { "vulkan" } else { "metal" };
+    let run = |backend: &str, json: bool| {
+        let mut a = args.to_vec();
+        a.extend(["--backend", backend]);
+        if json {
+            a.push("--json");
+        }
+        std::process::Command::new(env!("CARGO_BIN_EXE_flarebench"))
+            .args(&a)
+            .env("WGPU_BACKEND", other)
+            .output()
+            .unwrap()
+    };
+    let gpu = run("gpu", false);
+    assert!(!gpu.status.success());
+    let err = String::from_utf8_lossy(&gpu.stderr);
+    assert!(
+        err.contains("no GPU adapter found") && err.contains("mesa-vulkan-drivers"),
+        "{err}"
+    );
+    assert!(!err.contains("panicked"), "{err}");
+    let auto = run("auto", true);
+    assert!(auto.status.success(), "{}", String::from_utf8_lossy(&auto.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&auto.stdout).unwrap();
+    assert_eq!(v["backend"]["backend"], "cpu");
+    assert!(v["backend"]["note"].as_str().unwrap().starts_with("auto:"));
+    // The CPU path is the default's when asked for.
+    assert!(flarebench(&[&args[..], &["--backend", "cpu"]].concat()).status.success());
+}
