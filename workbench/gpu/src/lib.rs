@@ -11,6 +11,7 @@
 mod buffers;
 pub mod device;
 mod error;
+pub mod fringe;
 mod pipelines;
 pub mod renderer;
 mod targets;
