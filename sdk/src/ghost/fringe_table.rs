@@ -21,6 +21,18 @@ pub struct FringeTable {
 }
 
 impl FringeTable {
+    /// Number of intervals between the table's nodes (the nodes are at `τ = i / NODE_COUNT`,
+    /// `i = 0..=NODE_COUNT`): what a port of the lookups (the GPU backend's) indexes with.
+    pub const NODE_COUNT: usize = NODES;
+
+    /// The tabulated values, read-only (for ports of the lookups, e.g. the GPU backend's
+    /// `pack_tables`): `NODE_COUNT + 1` nodes, node `i` at `τ = i / NODE_COUNT` holding
+    /// `[F_r, F_g, F_b, H_r, H_g, H_b]`, the colour's share `F(τ)` and its integral
+    /// `H(τ) = ∫₀^τ F` per channel.
+    pub fn nodes(&self) -> &[[f32; 6]] {
+        &self.nodes
+    }
+
     /// The table of bins spread evenly over `spans` (`[lo, hi]` within `[0, 1]`, `lo < hi`;
     /// neighbours may overlap) with colours `colours` (per bin, any sign); `None` when a
     /// channel's total is too small against the others' to be split into shares.

@@ -13,6 +13,7 @@ mod buffers;
 pub mod compose;
 pub mod device;
 mod error;
+pub mod fringe;
 mod pipelines;
 pub mod renderer;
 mod targets;
