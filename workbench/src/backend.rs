@@ -7,8 +7,8 @@ use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::frame::Frame;
 use flarebench_sdk::ghost::context::GhostStats;
 use flarebench_sdk::image::HdrImage;
-use ghost_raytrace::ghosts::{self, RenderOptions, RenderScratch};
 use flarebench_sdk::starburst::StarburstCache;
+use ghost_raytrace::ghosts::{self, RenderOptions, RenderScratch};
 use ghost_raytrace::plan::LightPlan;
 use ghost_raytrace::scene::LightSpec;
 
@@ -243,7 +243,9 @@ impl GhostBackend {
         cache: &mut StarburstCache,
     ) -> anyhow::Result<Vec<StarburstLine>> {
         match &mut self.active {
-            Active::Cpu(_) => crate::compose::add_starbursts(img, system, frame, lights, setup, cache),
+            Active::Cpu(_) => {
+                crate::compose::add_starbursts(img, system, frame, lights, setup, cache)
+            }
             #[cfg(feature = "gpu")]
             Active::Gpu(renderer) => {
                 let (lines, splats) =

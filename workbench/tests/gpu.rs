@@ -40,7 +40,11 @@ fn render(backend: &str, out: &std::path::Path, extra: &[&str]) -> serde_json::V
 #[test]
 fn the_gpu_renders_the_cpu_image_and_reports_its_adapter() {
     let tmp = temp_dir("gpu");
-    for extra in [&[][..], &["--band-by-band"][..], &["--iris-blades", "6"][..]] {
+    for extra in [
+        &[][..],
+        &["--band-by-band"][..],
+        &["--iris-blades", "6"][..],
+    ] {
         let (cpu_path, gpu_path) = (tmp.path().join("cpu.exr"), tmp.path().join("gpu.exr"));
         let cpu_report = render("cpu", &cpu_path, extra);
         let report = render("gpu", &gpu_path, extra);
@@ -53,9 +57,20 @@ fn the_gpu_renders_the_cpu_image_and_reports_its_adapter() {
         let (cpu, gpu) = (read_exr(&cpu_path).unwrap(), read_exr(&gpu_path).unwrap());
         assert!(!gpu.has_non_finite());
         let c = gpu.compare(&cpu).unwrap();
-        eprintln!("{extra:?}: rmse {:.2e}, energy {:.2e}", c.relative_rmse, c.energy_error);
-        assert!(c.relative_rmse <= MAX_RMSE, "{extra:?}: rmse {}", c.relative_rmse);
-        assert!(c.energy_error.abs() <= MAX_ENERGY, "{extra:?}: energy {}", c.energy_error);
+        eprintln!(
+            "{extra:?}: rmse {:.2e}, energy {:.2e}",
+            c.relative_rmse, c.energy_error
+        );
+        assert!(
+            c.relative_rmse <= MAX_RMSE,
+            "{extra:?}: rmse {}",
+            c.relative_rmse
+        );
+        assert!(
+            c.energy_error.abs() <= MAX_ENERGY,
+            "{extra:?}: energy {}",
+            c.energy_error
+        );
         // Both lights' starbursts are drawn, and reported alike.
         for k in 0..2 {
             let (a, b) = (&report["starbursts"][k], &cpu_report["starbursts"][k]);
@@ -70,8 +85,14 @@ fn the_gpu_renders_the_cpu_image_and_reports_its_adapter() {
 fn the_gpu_tone_pass_maps_as_the_png_writer() {
     let tmp = temp_dir("gpu-png");
     let (cpu_path, gpu_path) = (tmp.path().join("cpu.png"), tmp.path().join("gpu.png"));
+    // The automatic exposure of the CPU image, given to both (it is taken from each
+    // backend's own ghosts, which differ within `MAX_RMSE`).
+    let ev = render("cpu", &cpu_path, &[])["exposure_ev"]
+        .as_f64()
+        .unwrap()
+        .to_string();
     for tone in ["aces", "clamp"] {
-        let extra = ["--exposure-ev", "4", "--tone", tone];
+        let extra = ["--exposure-ev", ev.as_str(), "--tone", tone];
         render("cpu", &cpu_path, &extra);
         render("gpu", &gpu_path, &extra);
         let cpu = image::open(&cpu_path).unwrap().to_rgb8();
@@ -84,7 +105,7 @@ fn the_gpu_tone_pass_maps_as_the_png_writer() {
             .filter(|(a, b)| a.abs_diff(**b) > 1)
             .count();
         let lit = cpu.as_raw().iter().filter(|&&v| v > 0).count();
-        assert!(lit > cpu.as_raw().len() / 2, "{tone}: the frame is mostly lit");
+        assert!(lit > cpu.as_raw().len() / 10, "{tone}: {lit} channels lit");
         let share = far as f64 / cpu.as_raw().len() as f64;
         eprintln!("{tone}: {far} channels more than one level apart ({share:.2e})");
         assert!(share <= MAX_FAR_CHANNELS, "{tone}: {share}");
@@ -107,7 +128,11 @@ fn without_an_adapter_gpu_says_what_to_install_and_auto_uses_the_cpu() {
         out,
     ];
     // No Metal on Linux, no Vulkan on macOS: with the other one asked for, no adapter.
-    let other = if cfg!(target_os = "macos") { "vulkan" } else { "metal" };
+    let other = if cfg!(target_os = "macos") {
+        "vulkan"
+    } else {
+        "metal"
+    };
     let run = |backend: &str, json: bool| {
         let mut a = args.to_vec();
         a.extend(["--backend", backend]);
@@ -129,10 +154,18 @@ fn without_an_adapter_gpu_says_what_to_install_and_auto_uses_the_cpu() {
     );
     assert!(!err.contains("panicked"), "{err}");
     let auto = run("auto", true);
-    assert!(auto.status.success(), "{}", String::from_utf8_lossy(&auto.stderr));
+    assert!(
+        auto.status.success(),
+        "{}",
+        String::from_utf8_lossy(&auto.stderr)
+    );
     let v: serde_json::Value = serde_json::from_slice(&auto.stdout).unwrap();
     assert_eq!(v["backend"]["backend"], "cpu");
     assert!(v["backend"]["note"].as_str().unwrap().starts_with("auto:"));
     // The CPU path is the default's when asked for.
-    assert!(flarebench(&[&args[..], &["--backend", "cpu"]].concat()).status.success());
+    assert!(
+        flarebench(&[&args[..], &["--backend", "cpu"]].concat())
+            .status
+            .success()
+    );
 }

@@ -44,13 +44,21 @@ const RASTER_WGSL: &str = concat!(
     include_str!("shaders/raster.wgsl")
 );
 
+/// The fringe pipeline's module: the raster shaders, the fringe shade and its entry point.
+const FRINGE_WGSL: &str = concat!(
+    include_str!("shaders/aperture.wgsl"),
+    include_str!("shaders/raster.wgsl"),
+    include_str!("shaders/fringe.wgsl"),
+    include_str!("shaders/fringe_entry.wgsl")
+);
+
 /// Every pipeline the ghost renderer uses.
 #[derive(Debug)]
 pub struct Pipelines {
     raster_layout: wgpu::BindGroupLayout,
     fringe_layout: wgpu::BindGroupLayout,
     upsample_layout: wgpu::BindGroupLayout,
-    raster: [Option<wgpu::RenderPipeline>; 3],
+    raster: [wgpu::RenderPipeline; 3],
     pub upsample: wgpu::RenderPipeline,
 }
 
@@ -151,9 +159,26 @@ impl Pipelines {
             bind_group_layouts: &[Some(&raster_layout)],
             immediate_size: 0,
         });
-        let raster = [Kind::Open, Kind::Edge, Kind::Fringe].map(|kind| {
-            (kind != Kind::Fringe).then(|| raster_pipeline(device, &layout, &raster_module, kind))
+        let fringe_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("fringe"),
+            source: wgpu::ShaderSource::Wgsl(FRINGE_WGSL.into()),
         });
+        let fringe_pipeline_layout =
+            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("fringe"),
+                bind_group_layouts: &[Some(&raster_layout), Some(&fringe_layout)],
+                immediate_size: 0,
+            });
+        let raster = [
+            raster_pipeline(device, &layout, &raster_module, Kind::Open),
+            raster_pipeline(device, &layout, &raster_module, Kind::Edge),
+            raster_pipeline(
+                device,
+                &fringe_pipeline_layout,
+                &fringe_module,
+                Kind::Fringe,
+            ),
+        ];
         let upsample_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("upsample"),
             source: wgpu::ShaderSource::Wgsl(include_str!("shaders/upsample.wgsl").into()),
@@ -194,14 +219,9 @@ impl Pipelines {
         }
     }
 
-    /// The raster pipeline of `kind`, if this build draws it.
-    pub fn raster(&self, kind: Kind) -> Option<&wgpu::RenderPipeline> {
-        self.raster[kind as usize].as_ref()
-    }
-
-    /// True when fringed triangles are drawn.
-    pub fn has_fringe(&self) -> bool {
-        self.raster[Kind::Fringe as usize].is_some()
+    /// The raster pipeline of `kind`.
+    pub fn raster(&self, kind: Kind) -> &wgpu::RenderPipeline {
+        &self.raster[kind as usize]
     }
 
     /// The raster bind group: level blocks, positions, attributes, triangles, aperture block,

@@ -308,13 +308,7 @@ impl GhostRenderer {
         bytes += self.kinds[0].upload(device, queue, &self.staging.open);
         bytes += self.kinds[1].upload(device, queue, &self.staging.edge);
         bytes += self.kinds[2].upload(device, queue, &self.staging.fringe);
-        if !self.staging.fringe.is_empty() && !self.pipelines.has_fringe() {
-            return Err(GpuError::Unsupported {
-                name: self.ctx.report.name.clone(),
-                what: "fringed meshes are not drawn on the GPU yet: render band by band".into(),
-            });
-        }
-        let tables: Vec<f32> = vec![0.0];
+        let tables = crate::fringe::pack_tables(&self.staging.fringe_tables);
         let table_bytes: &[u8] = bytemuck::cast_slice(&tables);
         self.fringe_tables.write(device, queue, table_bytes);
         bytes += table_bytes.len() as u64;
@@ -385,10 +379,7 @@ impl GhostRenderer {
             let mut calls = 0;
             for d in draws.iter().filter(|d| d.level == level) {
                 let k = d.kind as usize;
-                let Some(pipeline) = pipelines.raster(d.kind) else {
-                    continue;
-                };
-                pass.set_pipeline(pipeline);
+                pass.set_pipeline(pipelines.raster(d.kind));
                 pass.set_bind_group(
                     0,
                     &raster_groups[k],

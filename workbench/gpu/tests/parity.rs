@@ -78,9 +78,15 @@ fn check(name: &str, recorded: &FrameMeshes) {
 }
 
 #[test]
-fn heliar_band_by_band_circle() {
+fn heliar_circle_fringed_and_band_by_band() {
+    let r = record("heliar-tronnier", &["8,60"], &Aperture::Circular, false);
+    assert!(
+        r.meshes.iter().any(|(_, m)| !m.fringe.is_empty()),
+        "the default frame has fringed groups"
+    );
+    check("heliar circle, fringed", &r);
     let r = record("heliar-tronnier", &["8,60"], &Aperture::Circular, true);
-    check("heliar circle", &r);
+    check("heliar circle, band by band", &r);
 }
 
 fn iris() -> Aperture {
@@ -103,7 +109,7 @@ fn olf_mask() -> Aperture {
 }
 
 #[test]
-fn heliar_band_by_band_iris_and_mask() {
+fn heliar_iris_and_mask() {
     check(
         "heliar iris",
         &record("heliar-tronnier", &["8,60"], &iris(), true),
@@ -114,23 +120,21 @@ fn heliar_band_by_band_iris_and_mask() {
     );
 }
 
+/// The Nikon zoom's default frame (fringed groups, two lights), and with an iris and a mask
+/// (drawn band by band: the fringe model is the circle's).
 #[test]
-fn nikon_band_by_band_two_lights() {
+fn nikon_two_lights_iris_and_mask() {
     let r = record(
         "nikon-zoom-short",
         &["10,30", "4,200,0.5"],
         &Aperture::Circular,
-        true,
+        false,
     );
-    check("nikon circle, two lights", &r);
-    check(
-        "nikon iris",
-        &record("nikon-zoom-short", &["10,30"], &iris(), true),
-    );
-    check(
-        "nikon mask",
-        &record("nikon-zoom-short", &["10,30"], &olf_mask(), true),
-    );
+    check("nikon circle, two lights, fringed", &r);
+    let r = record("nikon-zoom-short", &["10,30"], &iris(), false);
+    check("nikon iris", &r);
+    let r = record("nikon-zoom-short", &["10,30"], &olf_mask(), false);
+    check("nikon mask", &r);
 }
 
 /// Starbursts composited on the GPU from the patterns the CPU splats: two lights in the frame

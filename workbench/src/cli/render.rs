@@ -442,11 +442,12 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
     let flare_sum = img.sum();
     let flare_max = img.max();
     // With the GPU backend a PNG of the flare alone is tone mapped there, in a last pass.
-    let gpu_png = if background.is_none() && OutputFormat::from_path(&args.output)? == OutputFormat::Png {
-        backend.tone_map(&tone)?
-    } else {
-        None
-    };
+    let gpu_png =
+        if background.is_none() && OutputFormat::from_path(&args.output)? == OutputFormat::Png {
+            backend.tone_map(&tone)?
+        } else {
+            None
+        };
     match (gpu_png, &background) {
         (Some(rgb), _) => save_png_rgb8(rgb, w, h, &args.output)?,
         (None, Some(bg)) => save_image_as(&add_onto(bg, &img)?, &args.output, &tone, precision)?,
