@@ -222,6 +222,7 @@ pub fn draw_into(
         frame,
         grids: &grids,
         aperture,
+        coverage: FrameLevels::GHOSTS,
     });
     let per_ghost = render_groups(&ctxs, plans, &groups, options, sink);
     sink.finish();

@@ -27,7 +27,7 @@ fn check(lens: &str, lights: &[&str], aperture: Aperture, band_by_band: bool) {
     let mut recorded = FrameMeshes::default();
     let stats2 = ghosts::draw_into(&sys, &aperture, frame, &plans, options, &mut recorded).unwrap();
     assert_eq!(stats, stats2);
-    let (_, grids, _) = recorded.levels.as_ref().expect("a frame was begun");
+    let (_, grids, _, _) = recorded.levels.as_ref().expect("a frame was begun");
     assert!(
         grids.len() >= 2,
         "{lens}: the frame should use coarse levels as well as full resolution: {grids:?}"

@@ -98,6 +98,18 @@ pub fn rasterize_ghost_mesh_into(
     let coverage = Coverage::Sampled {
         min_area: SAMPLED_MIN_AREA,
     };
+    rasterize_ghost_mesh_with(pixels, width, mesh, aperture, coverage);
+}
+
+/// [`rasterize_ghost_mesh_into`] with a choice of coverage (exact for a plugin's mesh, as the
+/// plugin ABI promises).
+pub fn rasterize_ghost_mesh_with(
+    pixels: &mut [[f32; 3]],
+    width: usize,
+    mesh: &GhostMesh,
+    aperture: &Aperture,
+    coverage: Coverage,
+) {
     rasterize_into(
         pixels,
         width,

@@ -18,8 +18,10 @@ use crate::aperture::Aperture;
 use crate::frame::Frame;
 use crate::image::{CoarseGrid, HdrImage, upsample_levels_into};
 
-use super::mesh::GhostMesh;
-use super::render::rasterize_ghost_mesh_into;
+use crate::raster::Coverage;
+
+use super::mesh::{GhostMesh, SAMPLED_MIN_AREA};
+use super::render::rasterize_ghost_mesh_with;
 
 /// The shape of a frame's drawing: the output frame, its levels and the aperture the edge
 /// triangles are shaded with.
@@ -32,9 +34,18 @@ pub struct FrameLevels<'a> {
     pub grids: &'a [CoarseGrid],
     /// The stop's opening the edge triangles are shaded with.
     pub aperture: &'a Aperture,
+    /// How triangles cover pixels: [`FrameLevels::GHOSTS`] for the ghost renderer's meshes,
+    /// [`Coverage::Exact`] for a plugin's (the ABI promises exact coverage).
+    pub coverage: Coverage,
 }
 
 impl FrameLevels<'_> {
+    /// The ghost renderer's coverage: triangles of at least [`SAMPLED_MIN_AREA`] pixels²
+    /// point-sampled, smaller ones exact.
+    pub const GHOSTS: Coverage = Coverage::Sampled {
+        min_area: SAMPLED_MIN_AREA,
+    };
+
     /// The frame of level `level` (pixels the meshes of that level are in).
     pub fn level_frame(&self, level: usize) -> Frame {
         self.frame.coarse(&self.grids[level])
@@ -60,14 +71,19 @@ pub trait GhostSink {
 #[derive(Clone, Debug, Default)]
 pub struct FrameMeshes {
     /// The output frame, the levels' grids and the aperture, once a frame has begun.
-    pub levels: Option<(Frame, Vec<CoarseGrid>, Aperture)>,
+    pub levels: Option<(Frame, Vec<CoarseGrid>, Aperture, Coverage)>,
     /// `(level, mesh)` in the order they were drawn.
     pub meshes: Vec<(usize, GhostMesh)>,
 }
 
 impl GhostSink for FrameMeshes {
     fn begin(&mut self, levels: FrameLevels<'_>) {
-        self.levels = Some((levels.frame, levels.grids.to_vec(), levels.aperture.clone()));
+        self.levels = Some((
+            levels.frame,
+            levels.grids.to_vec(),
+            levels.aperture.clone(),
+            levels.coverage,
+        ));
         self.meshes.clear();
     }
 
@@ -96,7 +112,13 @@ impl FrameMeshes {
         for (level, mesh) in &self.meshes {
             if let Some(img) = coarse.get_mut(*level) {
                 let w = img.width;
-                rasterize_ghost_mesh_into(&mut img.pixels, w, mesh, levels.aperture);
+                rasterize_ghost_mesh_with(
+                    &mut img.pixels,
+                    w,
+                    mesh,
+                    levels.aperture,
+                    levels.coverage,
+                );
             }
         }
         let pairs: Vec<(&HdrImage, &CoarseGrid)> = coarse.iter().zip(levels.grids).collect();
@@ -108,7 +130,13 @@ impl FrameMeshes {
         );
         for (level, mesh) in &self.meshes {
             if *level >= coarse_count {
-                rasterize_ghost_mesh_into(&mut out.pixels, frame.width, mesh, levels.aperture);
+                rasterize_ghost_mesh_with(
+                    &mut out.pixels,
+                    frame.width,
+                    mesh,
+                    levels.aperture,
+                    levels.coverage,
+                );
             }
         }
         out
@@ -118,10 +146,11 @@ impl FrameMeshes {
     pub fn frame_levels(&self) -> Option<FrameLevels<'_>> {
         self.levels
             .as_ref()
-            .map(|(frame, grids, aperture)| FrameLevels {
+            .map(|(frame, grids, aperture, coverage)| FrameLevels {
                 frame: *frame,
                 grids,
                 aperture,
+                coverage: *coverage,
             })
     }
 

@@ -10,6 +10,7 @@ use flarebench_sdk::frame::Frame;
 use flarebench_sdk::ghost::mesh::{GhostMesh, Mesh, SAMPLED_MIN_AREA};
 use flarebench_sdk::ghost::sink::{FrameLevels, GhostSink};
 use flarebench_sdk::image::{CoarseGrid, HdrImage};
+use flarebench_sdk::raster::Coverage;
 use flarebench_sdk::starburst::StarburstSplat;
 
 use crate::buffers::GrowBuffer;
@@ -98,6 +99,8 @@ pub struct GhostRenderer {
     frame: Option<Frame>,
     grids: Vec<CoarseGrid>,
     aperture: ApertureBlock,
+    /// Triangles of at least this many pixels² are point-sampled (the frame's coverage).
+    min_area: f32,
     staging: GhostMesh,
     draws: Vec<Draw>,
     error: Option<GpuError>,
@@ -130,6 +133,7 @@ impl GhostRenderer {
             frame: None,
             grids: Vec::new(),
             aperture: ApertureBlock::new(&Aperture::Circular),
+            min_area: SAMPLED_MIN_AREA,
             staging: GhostMesh::default(),
             draws: Vec::new(),
             error: None,
@@ -320,7 +324,7 @@ impl GhostRenderer {
                 let f = frame.coarse(g);
                 LevelBlock {
                     size: [f.width as f32, f.height as f32],
-                    min_area: SAMPLED_MIN_AREA,
+                    min_area: self.min_area,
                     _pad: 0.0,
                 }
             })
@@ -457,6 +461,10 @@ impl GhostSink for GhostRenderer {
         self.frame = Some(levels.frame);
         self.grids = levels.grids.to_vec();
         self.aperture = ApertureBlock::new(levels.aperture);
+        self.min_area = match levels.coverage {
+            Coverage::Sampled { min_area } => min_area,
+            Coverage::Exact => f32::MAX,
+        };
         self.staging.clear();
         self.draws.clear();
         self.error = None;

@@ -149,7 +149,7 @@ fn heliar_with_starbursts() {
     let sys = load_lens("heliar-tronnier");
     let lights = ["8,60", "3,200,0.5,3200"];
     let recorded = record("heliar-tronnier", &lights, &Aperture::Circular, true);
-    let (frame, _, _) = recorded.levels.clone().unwrap();
+    let (frame, _, _, _) = recorded.levels.clone().unwrap();
     let lens = StarburstLens::new(&sys).unwrap();
     let aperture = Aperture::Circular;
     let source = StarburstSource {
