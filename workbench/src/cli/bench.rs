@@ -20,7 +20,14 @@ use ghost_raytrace::reference::reference_image_of_order;
 use ghost_raytrace::scene::{LightSpec, Quality};
 use serde::Serialize;
 
+use anyhow::Context;
+use flarebench_sdk::LensSystem;
+use flarebench_sdk::frame::Frame;
+use ghost_raytrace::plan::LightPlan;
+
 use super::render::{frame_for, parse_downscale, parse_size};
+use crate::aperture_file::{MaskEncoding, load_aperture_mask};
+use crate::backend::{BackendChoice, BackendReport, GhostBackend};
 use crate::lens_library;
 use crate::precomputed::load_precomputed;
 use crate::table::Table;
@@ -65,9 +72,58 @@ pub struct BenchArgs {
     /// --band-by-band`).
     #[arg(long)]
     pub band_by_band: bool,
+    /// Backends to time, comma separated: cpu, gpu (any adapter, a software one included) or
+    /// auto; each row gives its backend, and a GPU row the adapter, the CPU time of tracing
+    /// and meshing, the bytes uploaded and the GPU time per frame.
+    #[arg(long, value_delimiter = ',', default_values_t = [BackendChoice::Cpu])]
+    pub backend: Vec<BackendChoice>,
+    /// Apertures to time, comma separated: circle, iris (6 straight blades) or mask
+    /// (OpenLensFlare's aperture image, lenses/masks/aperture.bmp).
+    #[arg(long, value_delimiter = ',', default_values_t = [BenchAperture::Circle])]
+    pub aperture: Vec<BenchAperture>,
     /// Print the results as JSON.
     #[arg(long)]
     pub json: bool,
+}
+
+/// An aperture the bench times.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum BenchAperture {
+    Circle,
+    Iris,
+    Mask,
+}
+
+impl std::fmt::Display for BenchAperture {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            BenchAperture::Circle => "circle",
+            BenchAperture::Iris => "iris",
+            BenchAperture::Mask => "mask",
+        })
+    }
+}
+
+impl BenchAperture {
+    fn aperture(self) -> anyhow::Result<Aperture> {
+        Ok(match self {
+            BenchAperture::Circle => Aperture::Circular,
+            BenchAperture::Iris => Aperture::Iris {
+                blades: 6,
+                rotation_rad: 0.0,
+                roundness: 0.0,
+            },
+            BenchAperture::Mask => {
+                let path = lens_library::library_dirs()
+                    .into_iter()
+                    .map(|d| d.join("masks/aperture.bmp"))
+                    .find(|p| p.is_file())
+                    .context("OpenLensFlare's aperture mask, lenses/masks/aperture.bmp, is not found beside the bundled lenses")?;
+                Aperture::Mask(load_aperture_mask(&path, MaskEncoding::Auto)?.mask)
+            }
+        })
+    }
 }
 
 /// One lens × preset.
@@ -75,6 +131,14 @@ pub struct BenchArgs {
 pub struct BenchRow {
     pub lens: String,
     pub quality: Quality,
+    pub aperture: BenchAperture,
+    /// Where the ghosts were drawn, and on what (`crate::backend::BackendReport`: the GPU's
+    /// adapter, meshing time, triangles and bytes uploaded, pass times of the last run).
+    pub backend: BackendReport,
+    /// GPU rows: medians over the runs of the CPU's tracing and meshing and of the GPU's
+    /// passes (milliseconds; the render time also holds the readback).
+    pub mesh_ms: Option<f64>,
+    pub gpu_ms: Option<f64>,
     /// Reflections per ghost path planned for (2, or 4 for two and four).
     pub reflections: ReflectionOrder,
     /// True when the plan looked the bounds up in `--precomputed`'s table.
@@ -116,7 +180,6 @@ pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
         args.precomputed.is_none() || args.lenses.len() == 1,
         "--precomputed needs exactly one lens (a table is made for one lens)"
     );
-    let aperture = Aperture::Circular;
     let mut rows = Vec::new();
     for name in &args.lenses {
         let sys = lens_library::load(name, quiet || args.json)?.system;
@@ -126,100 +189,92 @@ pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
         };
         let frame = frame_for(&sys, args.size);
         let error_frame = frame_for(&sys, args.error_size.unwrap_or(args.size));
-        let reference = if args.error {
-            if !quiet && !args.json {
-                eprintln!(
-                    "{name}: rendering the reference at {}×{} …",
-                    error_frame.width, error_frame.height
-                );
-            }
-            Some(reference_image_of_order(
-                &sys,
-                &aperture,
-                error_frame,
-                lights,
-                args.reflections,
-            )?)
-        } else {
-            None
-        };
         // The lens's interface tables, built once per lens (as a plugin does when the lens
         // is prepared), for every frame's plan.
         let t = Instant::now();
         let lens_tables = LensTables::new(&sys);
         let prepare_ms = t.elapsed().as_secs_f64() * 1e3;
-        for &q in &args.quality {
-            let preset = PlanOptions::for_quality(q, table.as_ref());
-            let opts = PlanOptions {
-                max_downscale: args.max_downscale.unwrap_or(preset.max_downscale),
-                reflections: args.reflections,
-                lens_tables: Some(&lens_tables),
-                ..preset
-            };
-            let (mut plan_ms, mut render_ms, mut frame_ms) = (vec![], vec![], vec![]);
-            let mut img = HdrImage::new(frame.width, frame.height);
-            let mut last = None;
-            let options = ghosts::RenderOptions {
-                band_by_band: args.band_by_band,
-                ..Default::default()
-            };
-            let mut scratch = ghosts::RenderScratch::default();
-            for _ in 0..args.runs {
-                let t0 = Instant::now();
-                let plans = plan::plan(&sys, lights, &frame, &opts)?;
-                let t1 = Instant::now();
-                // Into one frame buffer kept from run to run, as a live preview draws into its
-                // window's buffer: its last frame replaced (no clearing pass), the coarse
-                // frames kept too.
-                ghosts::render_into_reusing(
+        for &ap in &args.aperture {
+            let aperture = ap.aperture()?;
+            let reference = if args.error {
+                if !quiet && !args.json {
+                    eprintln!(
+                        "{name}: rendering the reference at {}×{} ({ap}) …",
+                        error_frame.width, error_frame.height
+                    );
+                }
+                Some(reference_image_of_order(
                     &sys,
                     &aperture,
-                    frame,
-                    &plans,
-                    ghosts::RenderOptions {
-                        replace: true,
-                        ..options
-                    },
-                    &mut scratch,
-                    &mut img.pixels,
-                )?;
-                let t2 = Instant::now();
-                anyhow::ensure!(!img.has_non_finite(), "non-finite pixels");
-                plan_ms.push((t1 - t0).as_secs_f64() * 1e3);
-                render_ms.push((t2 - t1).as_secs_f64() * 1e3);
-                frame_ms.push((t2 - t0).as_secs_f64() * 1e3);
-                last = Some(plans);
+                    error_frame,
+                    lights,
+                    args.reflections,
+                )?)
+            } else {
+                None
+            };
+            for &choice in &args.backend {
+                let mut backend = GhostBackend::open(choice)?;
+                for &q in &args.quality {
+                    let preset = PlanOptions::for_quality(q, table.as_ref());
+                    let opts = PlanOptions {
+                        max_downscale: args.max_downscale.unwrap_or(preset.max_downscale),
+                        reflections: args.reflections,
+                        lens_tables: Some(&lens_tables),
+                        ..preset
+                    };
+                    let case = Case {
+                        sys: &sys,
+                        aperture: &aperture,
+                        lights,
+                        opts: &opts,
+                        options: ghosts::RenderOptions {
+                            band_by_band: args.band_by_band,
+                            ..Default::default()
+                        },
+                    };
+                    let timed = case.time(&mut backend, frame, args.runs)?;
+                    let lp = &timed.plans[0];
+                    let (total, dropped) = lp.energy();
+                    let error = reference
+                        .as_ref()
+                        .map(|r| -> anyhow::Result<_> {
+                            let plans = plan::plan(&sys, lights, &error_frame, &opts)?;
+                            let (img, _) = backend.render(
+                                &sys,
+                                &aperture,
+                                error_frame,
+                                &plans,
+                                case.options,
+                            )?;
+                            Ok(img.compare(r)?)
+                        })
+                        .transpose()?;
+                    rows.push(BenchRow {
+                        lens: sys.name.clone(),
+                        quality: q,
+                        aperture: ap,
+                        backend: timed.report,
+                        mesh_ms: timed.mesh_ms,
+                        gpu_ms: timed.gpu_ms,
+                        reflections: args.reflections,
+                        precomputed: table.is_some(),
+                        width: frame.width,
+                        height: frame.height,
+                        ghosts_drawn: lp.ghosts.len(),
+                        ghosts_total: lp.ghosts.len() + lp.dropped.len(),
+                        dropped_energy_fraction: if total > 0.0 { dropped / total } else { 0.0 },
+                        prepare_ms,
+                        plan_ms: timed.plan_ms,
+                        render_ms: timed.render_ms,
+                        frame_ms: timed.frame_ms,
+                        error_width: error.map(|_| error_frame.width),
+                        error_height: error.map(|_| error_frame.height),
+                        relative_rmse: error.map(|c| c.relative_rmse),
+                        energy_error: error.map(|c| c.energy_error),
+                    });
+                }
             }
-            let plans = last.expect("at least one run");
-            let lp = &plans[0];
-            let (total, dropped) = lp.energy();
-            let error = reference
-                .as_ref()
-                .map(|r| -> anyhow::Result<_> {
-                    let plans = plan::plan(&sys, lights, &error_frame, &opts)?;
-                    let img = ghosts::render_with(&sys, &aperture, error_frame, &plans, options)?.0;
-                    Ok(img.compare(r)?)
-                })
-                .transpose()?;
-            rows.push(BenchRow {
-                lens: sys.name.clone(),
-                quality: q,
-                reflections: args.reflections,
-                precomputed: table.is_some(),
-                width: frame.width,
-                height: frame.height,
-                ghosts_drawn: lp.ghosts.len(),
-                ghosts_total: lp.ghosts.len() + lp.dropped.len(),
-                dropped_energy_fraction: if total > 0.0 { dropped / total } else { 0.0 },
-                prepare_ms,
-                plan_ms: median(plan_ms),
-                render_ms: median(render_ms),
-                frame_ms: median(frame_ms),
-                error_width: error.map(|_| error_frame.width),
-                error_height: error.map(|_| error_frame.height),
-                relative_rmse: error.map(|c| c.relative_rmse),
-                energy_error: error.map(|c| c.energy_error),
-            });
         }
     }
     if args.json {
@@ -229,6 +284,8 @@ pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
     let mut t = Table::new(&[
         "lens",
         "quality",
+        "aperture",
+        "backend",
         "size",
         "ghosts",
         "dropped",
@@ -236,6 +293,8 @@ pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
         "plan ms",
         "render ms",
         "frame ms",
+        "mesh ms",
+        "GPU ms",
         "rel RMSE",
         "energy",
     ]);
@@ -244,6 +303,8 @@ pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
         t.row(vec![
             r.lens.clone(),
             r.quality.to_string(),
+            r.aperture.to_string(),
+            r.backend.backend.clone(),
             format!("{}×{}", r.width, r.height),
             format!("{}/{}", r.ghosts_drawn, r.ghosts_total),
             format!("{:.2}%", 100.0 * r.dropped_energy_fraction),
@@ -251,11 +312,21 @@ pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
             format!("{:.1}", r.plan_ms),
             format!("{:.1}", r.render_ms),
             format!("{:.1}", r.frame_ms),
+            r.mesh_ms.map_or("—".to_string(), |v| format!("{v:.1}")),
+            r.gpu_ms.map_or("—".to_string(), |v| format!("{v:.1}")),
             pct(r.relative_rmse),
             pct(r.energy_error),
         ]);
     }
     print!("{}", t.render());
+    let mut adapters: Vec<String> = rows
+        .iter()
+        .filter_map(|r| r.backend.adapter.clone())
+        .collect();
+    adapters.dedup();
+    for a in adapters {
+        println!("gpu: {a}");
+    }
     println!(
         "light {},{}{}{}; lens ms: the lens's interface tables, built once per lens before the runs; medians of {} runs on {} threads; errors against the reference{}",
         args.light.theta_deg,
@@ -278,4 +349,79 @@ pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
         }
     );
     Ok(())
+}
+
+/// One lens, aperture and preset to time.
+struct Case<'a> {
+    sys: &'a LensSystem,
+    aperture: &'a Aperture,
+    lights: &'a [LightSpec],
+    opts: &'a PlanOptions<'a>,
+    options: ghosts::RenderOptions,
+}
+
+/// A case's medians over its runs, and the last run's plans and backend report.
+struct Timed {
+    plan_ms: f64,
+    render_ms: f64,
+    frame_ms: f64,
+    mesh_ms: Option<f64>,
+    gpu_ms: Option<f64>,
+    plans: Vec<LightPlan>,
+    report: BackendReport,
+}
+
+impl Case<'_> {
+    /// Plans and renders `runs` frames. On the CPU into one frame buffer kept from run to run,
+    /// as a live preview draws into its window's buffer: its last frame replaced (no clearing
+    /// pass), the coarse frames kept too. On the GPU with the renderer's buffers and targets
+    /// kept, each frame read back.
+    fn time(&self, backend: &mut GhostBackend, frame: Frame, runs: usize) -> anyhow::Result<Timed> {
+        let (mut plan_ms, mut render_ms, mut frame_ms) = (vec![], vec![], vec![]);
+        let (mut mesh_ms, mut gpu_ms) = (vec![], vec![]);
+        let mut img = HdrImage::new(frame.width, frame.height);
+        let mut scratch = ghosts::RenderScratch::default();
+        let mut last = None;
+        for _ in 0..runs {
+            let t0 = Instant::now();
+            let plans = plan::plan(self.sys, self.lights, &frame, self.opts)?;
+            let t1 = Instant::now();
+            if backend.is_gpu() {
+                img = backend
+                    .render(self.sys, self.aperture, frame, &plans, self.options)?
+                    .0;
+                let r = backend.report();
+                mesh_ms.extend(r.mesh_ms);
+                gpu_ms.extend(r.gpu_ms);
+            } else {
+                ghosts::render_into_reusing(
+                    self.sys,
+                    self.aperture,
+                    frame,
+                    &plans,
+                    ghosts::RenderOptions {
+                        replace: true,
+                        ..self.options
+                    },
+                    &mut scratch,
+                    &mut img.pixels,
+                )?;
+            }
+            let t2 = Instant::now();
+            anyhow::ensure!(!img.has_non_finite(), "non-finite pixels");
+            plan_ms.push((t1 - t0).as_secs_f64() * 1e3);
+            render_ms.push((t2 - t1).as_secs_f64() * 1e3);
+            frame_ms.push((t2 - t0).as_secs_f64() * 1e3);
+            last = Some(plans);
+        }
+        Ok(Timed {
+            plan_ms: median(plan_ms),
+            render_ms: median(render_ms),
+            frame_ms: median(frame_ms),
+            mesh_ms: (!mesh_ms.is_empty()).then(|| median(mesh_ms)),
+            gpu_ms: (!gpu_ms.is_empty()).then(|| median(gpu_ms)),
+            plans: last.expect("at least one run"),
+            report: backend.report().clone(),
+        })
+    }
 }
