@@ -169,3 +169,42 @@ fn without_an_adapter_gpu_says_what_to_install_and_auto_uses_the_cpu() {
             .success()
     );
 }
+
+/// `apply --backend gpu` adds the flare the CPU adds.
+#[test]
+fn apply_on_the_gpu_matches_the_cpu() {
+    use flarebench::output::{ToneMap, save_image};
+    use flarebench_sdk::image::HdrImage;
+    let tmp = temp_dir("gpu-apply");
+    let scene = tmp.path().join("scene.exr");
+    let mut img = HdrImage::new(320, 180);
+    for (i, p) in img.pixels.iter_mut().enumerate() {
+        let (x, y) = ((i % 320) as f64, (i / 320) as f64);
+        let d = (x - 230.5).hypot(y - 60.5);
+        *p = if d < 3.0 { [2000.0; 3] } else { [0.01; 3] };
+    }
+    save_image(&img, &scene, &ToneMap::default()).unwrap();
+    let mut out = Vec::new();
+    for backend in ["cpu", "gpu"] {
+        let path = tmp.path().join(format!("{backend}.exr"));
+        let v = json(&[
+            "apply",
+            scene.to_str().unwrap(),
+            "--lens",
+            "heliar-tronnier",
+            "--starburst-texels",
+            "128",
+            "--backend",
+            backend,
+            "-o",
+            path.to_str().unwrap(),
+            "--json",
+        ]);
+        assert_eq!(v["backend"]["backend"], backend);
+        assert!(v["ghosts_traced"].as_u64().unwrap() > 0);
+        out.push(read_exr(&path).unwrap());
+    }
+    let c = out[1].compare(&out[0]).unwrap();
+    eprintln!("apply: rmse {:.2e}, energy {:.2e}", c.relative_rmse, c.energy_error);
+    assert!(c.relative_rmse <= MAX_RMSE && c.energy_error.abs() <= MAX_ENERGY, "{c:?}");
+}

@@ -27,13 +27,13 @@ use flarebench_sdk::ghost::bounds::direct_flux;
 use flarebench_sdk::image::HdrImage;
 use flarebench_sdk::starburst::StarburstCache;
 use flarebench_sdk::trace::InterfaceTableSet;
-use ghost_raytrace::ghosts;
 use ghost_raytrace::plan::{self, PlanOptions};
 use ghost_raytrace::scene::{LightSpec, Quality};
 use serde::Serialize;
 
 use super::render::{IrisArgs, StarburstArgs, StarburstMode};
-use crate::compose::{StarburstLine, StarburstSetup, add_onto, add_starbursts};
+use crate::backend::{BackendChoice, BackendReport, GhostBackend};
+use crate::compose::{StarburstLine, StarburstSetup, add_onto};
 use crate::input_image::read_input_image;
 use crate::lens_library;
 use crate::output::{ExrPrecision, OutputFormat, ToneMap, ToneOperator, save_image_as};
@@ -69,6 +69,10 @@ pub struct ApplyArgs {
     pub film_width_mm: Option<f64>,
     #[arg(long, default_value_t = Quality::Default)]
     pub quality: Quality,
+    /// Where the ghosts are drawn and the starbursts composited: auto (a hardware GPU if
+    /// there is one, else the CPU), cpu or gpu (as `render --backend`; docs/gpu.md).
+    #[arg(long, value_enum, default_value_t = BackendChoice::Auto)]
+    pub backend: BackendChoice,
     #[command(flatten)]
     pub iris: IrisArgs,
     #[command(flatten)]
@@ -116,6 +120,8 @@ struct ApplyReport {
     /// With a PNG output: how many pixels away from the lights ([`AWAY_FROM_LIGHT_PX`]) the
     /// flare changes by at least one 8-bit step (`null` for EXR output).
     changed_pixels: Option<usize>,
+    /// Where the ghosts were drawn (`crate::backend`).
+    backend: BackendReport,
 }
 
 pub fn run(args: &ApplyArgs, quiet: bool) -> anyhow::Result<()> {
@@ -197,7 +203,8 @@ pub fn run(args: &ApplyArgs, quiet: bool) -> anyhow::Result<()> {
     } else {
         plan::plan(sys, &lights, &frame, &opts)?
     };
-    let (mut flare, _) = ghosts::render(sys, &aperture, frame, &plans)?;
+    let mut backend = GhostBackend::open(args.backend)?;
+    let (mut flare, _) = backend.render(sys, &aperture, frame, &plans, Default::default())?;
     let starbursts = if mode == StarburstMode::Off {
         Vec::new()
     } else {
@@ -206,7 +213,7 @@ pub fn run(args: &ApplyArgs, quiet: bool) -> anyhow::Result<()> {
             dust: dust.as_ref(),
             settings,
         };
-        add_starbursts(
+        backend.add_starbursts(
             &mut flare,
             sys,
             &frame,
@@ -246,6 +253,7 @@ pub fn run(args: &ApplyArgs, quiet: bool) -> anyhow::Result<()> {
         lights: applied,
         skipped,
         starbursts,
+        backend: backend.report().clone(),
     };
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
