@@ -205,6 +205,12 @@ fn apply_on_the_gpu_matches_the_cpu() {
         out.push(read_exr(&path).unwrap());
     }
     let c = out[1].compare(&out[0]).unwrap();
-    eprintln!("apply: rmse {:.2e}, energy {:.2e}", c.relative_rmse, c.energy_error);
-    assert!(c.relative_rmse <= MAX_RMSE && c.energy_error.abs() <= MAX_ENERGY, "{c:?}");
+    eprintln!(
+        "apply: rmse {:.2e}, energy {:.2e}",
+        c.relative_rmse, c.energy_error
+    );
+    assert!(
+        c.relative_rmse <= MAX_RMSE && c.energy_error.abs() <= MAX_ENERGY,
+        "{c:?}"
+    );
 }
