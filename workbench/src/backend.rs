@@ -71,6 +71,9 @@ pub struct BackendReport {
     pub bytes_uploaded: Option<u64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub draw_calls: Option<usize>,
+    /// GPU only: fragments the triangles make (`flarebench_gpu::FrameReport::fragments`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fragments: Option<u64>,
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub passes: Vec<PassLine>,
 }
@@ -117,13 +120,14 @@ impl BackendReport {
         s += "\n";
         if let (Some(mesh), Some(t)) = (self.mesh_ms, self.triangles) {
             s += &format!(
-                "  CPU tracing and meshing {mesh:.1} ms; {} triangles uploaded ({} open, {} edge, {} fringed), {:.1} MB, {} draw calls\n",
+                "  CPU tracing and meshing {mesh:.1} ms; {} triangles uploaded ({} open, {} edge, {} fringed), {:.1} MB, {} draw calls, {:.2e} fragments\n",
                 t.iter().sum::<usize>(),
                 t[0],
                 t[1],
                 t[2],
                 self.bytes_uploaded.unwrap_or(0) as f64 / 1e6,
-                self.draw_calls.unwrap_or(0)
+                self.draw_calls.unwrap_or(0),
+                self.fragments.unwrap_or(0) as f64
             );
         }
         if !self.passes.is_empty() {
@@ -312,18 +316,9 @@ impl GhostBackend {
                 let r = renderer.report();
                 self.report.mesh_ms = Some(mesh_ms);
                 self.report.triangles = Some(r.triangles);
-                self.report.bytes_uploaded = Some(r.bytes_uploaded);
                 self.report.draw_calls = Some(r.draw_calls);
-                self.report.passes = r
-                    .passes
-                    .iter()
-                    .map(|p| PassLine {
-                        pass: p.name.clone(),
-                        ms: p.ms,
-                    })
-                    .collect();
-                self.report.gpu_ms =
-                    (!r.passes.is_empty()).then(|| r.passes.iter().map(|p| p.ms).sum());
+                self.report.fragments = Some(r.fragments);
+                self.report.take_passes(r);
                 Ok((img, stats))
             }
         }

@@ -75,6 +75,10 @@ pub struct FrameReport {
     pub bytes_uploaded: u64,
     /// Draw calls recorded.
     pub draw_calls: usize,
+    /// Fragments the frame's triangles make (pixels of their levels): the area of each
+    /// point-sampled triangle, the whole-pixel bounding box of each exactly covered one —
+    /// with the bytes uploaded, what a frame costs a GPU (docs/performance.md).
+    pub fragments: u64,
     /// GPU time per pass, when the adapter measures it.
     pub passes: Vec<PassTiming>,
 }
@@ -257,6 +261,9 @@ impl GhostRenderer {
             self.staging.edge.len(),
             self.staging.fringe.len(),
         ];
+        self.report.fragments += fragments(&mesh.open, self.min_area)
+            + fragments(&mesh.edge, self.min_area)
+            + fragments(&mesh.fringe, self.min_area);
         self.staging.append(mesh);
         let after = [
             self.staging.open.len(),
@@ -442,6 +449,26 @@ impl GhostRenderer {
         self.report.draw_calls = calls;
         Ok(())
     }
+}
+
+/// The fragments `mesh`'s triangles make (see [`FrameReport::fragments`]).
+fn fragments<const N: usize>(mesh: &Mesh<N>, min_area: f32) -> u64 {
+    let mut total = 0.0_f64;
+    for t in &mesh.triangles {
+        let [a, b, c] = t.map(|i| mesh.positions.get(i as usize).copied().unwrap_or_default());
+        let area = 0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1])).abs();
+        if !area.is_finite() {
+            continue;
+        }
+        total += if area >= min_area {
+            f64::from(area)
+        } else {
+            let w = a[0].max(b[0]).max(c[0]).ceil() - a[0].min(b[0]).min(c[0]).floor();
+            let h = a[1].max(b[1]).max(c[1]).ceil() - a[1].min(b[1]).min(c[1]).floor();
+            f64::from(w * h)
+        };
+    }
+    total as u64
 }
 
 fn clear_attachment(view: &wgpu::TextureView) -> wgpu::RenderPassColorAttachment<'_> {
