@@ -324,3 +324,34 @@ impl GhostBackend {
         }
     }
 }
+
+impl GhostBackend {
+    /// Renders `scene` with plugin instance `inst` into `image`: the plugin's own pixels, and
+    /// its mesh drawn by this backend with exact coverage (as the plugin ABI promises) — on
+    /// the CPU rasterized into `image`
+    /// ([`PluginInstance::render_into`](flarebench_sdk::abi::host::PluginInstance::render_into)),
+    /// on the GPU drawn by the ghost renderer as one full-resolution level, read back and added
+    /// to the plugin's pixels.
+    pub fn render_plugin(
+        &mut self,
+        inst: &mut flarebench_sdk::abi::host::PluginInstance<'_>,
+        scene: &flarebench_sdk::abi::author::Scene,
+        values: &[f64],
+        image: &mut HdrImage,
+    ) -> anyhow::Result<flarebench_sdk::abi::host::RenderStats> {
+        match &mut self.active {
+            Active::Cpu(_) => Ok(inst.render_into(scene, values, image)?),
+            #[cfg(feature = "gpu")]
+            Active::Gpu(renderer) => {
+                let stats = inst.render_into_sink(scene, values, image, renderer.as_mut())?;
+                let mesh = renderer.read_back()?;
+                image.add_image(&mesh)?;
+                let r = renderer.report();
+                self.report.triangles = Some(r.triangles);
+                self.report.draw_calls = Some(r.draw_calls);
+                self.report.take_passes(r);
+                Ok(stats)
+            }
+        }
+    }
+}

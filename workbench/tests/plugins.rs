@@ -494,3 +494,73 @@ fn compare_runs_the_ghost_plugin_with_an_rgb_light() {
     assert!(a["items_drawn"].as_u64().unwrap() > 0, "{a}");
     assert!(out_png.is_file());
 }
+
+/// `compare --backend gpu` draws a plugin's mesh on the GPU (`ghost-matrix`'s ghosts) and says
+/// so; its image equals `--backend cpu`'s within the GPU parity bounds (relative RMSE 0.5%,
+/// energy 0.1%; workbench/gpu/tests/plugin_mesh.rs measures the mesh alone).
+#[cfg(feature = "gpu")]
+#[test]
+fn compare_draws_plugin_meshes_on_the_gpu_and_reports_the_backend() {
+    beside_binary("ghost_matrix");
+    let tmp = temp_dir("compare-gpu");
+    let run = |backend: &str, json: bool| {
+        let out_exr = tmp.path().join(format!("cmp-{backend}.exr"));
+        let mut args = vec![
+            "compare",
+            "heliar-tronnier",
+            "--light",
+            "8,60",
+            "--light",
+            "3,200,0.5,3200",
+            "--algo",
+            "ghost-matrix",
+            "--size",
+            "320x180",
+            "--runs",
+            "2",
+            "--no-reference",
+            "--backend",
+            backend,
+            "-o",
+            out_exr.to_str().unwrap(),
+        ];
+        if json {
+            args.push("--json");
+        }
+        let out = flarebench(&args);
+        assert!(
+            out.status.success(),
+            "{backend}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        (out, out_exr)
+    };
+    let (gpu, gpu_exr) = run("gpu", true);
+    let v: serde_json::Value = serde_json::from_slice(&gpu.stdout).unwrap();
+    let b = &v["backend"];
+    assert_eq!(b["backend"], "gpu", "{b}");
+    assert!(!b["adapter"].as_str().unwrap().is_empty(), "{b}");
+    let algo = &v["algorithms"][0];
+    assert!(algo["failure"].is_null(), "{algo}");
+    assert!(algo["mesh_triangles"].as_u64().unwrap() > 0, "{algo}");
+    assert_eq!(b["triangles"][0], algo["mesh_triangles"], "{b}");
+    let (cpu, cpu_exr) = run("cpu", true);
+    let v: serde_json::Value = serde_json::from_slice(&cpu.stdout).unwrap();
+    assert_eq!(v["backend"]["backend"], "cpu");
+    let (gpu_img, cpu_img) = (
+        flarebench::output::read_exr(&gpu_exr).unwrap(),
+        flarebench::output::read_exr(&cpu_exr).unwrap(),
+    );
+    assert!(!gpu_img.has_non_finite());
+    let c = gpu_img.compare(&cpu_img).unwrap();
+    eprintln!(
+        "compare gpu against cpu: rmse {:.2e}, energy {:.2e}",
+        c.relative_rmse, c.energy_error
+    );
+    assert!(c.relative_rmse <= 0.005, "rmse {}", c.relative_rmse);
+    assert!(c.energy_error.abs() <= 0.001, "energy {}", c.energy_error);
+    // The table says it too.
+    let (text, _) = run("gpu", false);
+    let text = String::from_utf8_lossy(&text.stdout);
+    assert!(text.contains("plugin meshes drawn by: gpu on "), "{text}");
+}

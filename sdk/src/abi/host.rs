@@ -25,9 +25,12 @@ use std::path::{Path, PathBuf};
 use crate::LensSystem;
 use crate::aperture::Aperture;
 use crate::color::LightSpectrum;
-use crate::image::HdrImage;
+use crate::ghost::mesh::GhostMesh;
+use crate::ghost::render::rasterize_ghost_mesh_with;
+use crate::ghost::sink::{FrameLevels, GhostSink};
+use crate::image::{CoarseGrid, HdrImage};
 use crate::io::write_xml;
-use crate::raster::rasterize;
+use crate::raster::Coverage;
 use rayon::prelude::*;
 
 use super::author::{PluginKind, Scene};
@@ -438,6 +441,8 @@ pub struct PluginInstance<'p> {
     poisoned: bool,
     /// Mesh capacities the last render asked for (vertices, triangles).
     mesh_capacity: (u32, u32),
+    /// The last render's checked mesh, as the sinks take it (kept between frames).
+    mesh: GhostMesh,
 }
 
 impl LoadedPlugin {
@@ -460,6 +465,7 @@ impl LoadedPlugin {
             ptr,
             poisoned: false,
             mesh_capacity: (0, 0),
+            mesh: GhostMesh::default(),
         })
     }
 
@@ -560,12 +566,79 @@ impl PluginInstance<'_> {
     /// [`PluginInstance::render`] into `image`, which is resized to the scene's frame and
     /// cleared first: a caller rendering frame after frame keeps one buffer (no fresh pages
     /// to fault in). On an error `image` holds no meaningful picture.
+    ///
+    /// The plugin's mesh is rasterized into `image` on the CPU with exact coverage: this is
+    /// [`PluginInstance::render_into_sink`] with a sink that rasterizes into `image`.
     pub fn render_into(
         &mut self,
         scene: &Scene,
         values: &[f64],
         image: &mut HdrImage,
     ) -> Result<RenderStats, PluginCallError> {
+        let stats = self.render_checked(scene, values, image)?;
+        let width = image.width;
+        let mut cpu = ExactRaster {
+            pixels: &mut image.pixels,
+            width,
+            aperture: &scene.aperture,
+        };
+        self.send_mesh(scene, &mut cpu);
+        Ok(stats)
+    }
+
+    /// Renders `scene` as [`PluginInstance::render_into`] does, except that the plugin's mesh
+    /// goes to `sink` instead of being rasterized into `image`: the plugin's own pixels (checked
+    /// finite) are left in `image`, and the caller adds what the sink draws (the CPU
+    /// rasterizer, the GPU backend, a recording).
+    ///
+    /// The sink gets one frame of one full-resolution level,
+    /// `FrameLevels { frame: scene.frame, grids: &[CoarseGrid::for_frame(w, h, 1)], aperture:
+    /// &scene.aperture, coverage: Coverage::Exact }` — exact coverage, as the plugin ABI
+    /// promises for plugin meshes — and, when the plugin returned a mesh, one
+    /// [`GhostMesh`] in level 0 whose `open` mesh holds the plugin's checked triangles
+    /// (vertex positions in pixels, attributes its RGB irradiance); `edge` and `fringe` are
+    /// empty. `begin` and `finish` are called even without a mesh, so that the sink's frame is
+    /// black then. On an error the sink is not called at all and `image` holds no meaningful
+    /// picture.
+    pub fn render_into_sink(
+        &mut self,
+        scene: &Scene,
+        values: &[f64],
+        image: &mut HdrImage,
+        sink: &mut dyn GhostSink,
+    ) -> Result<RenderStats, PluginCallError> {
+        let stats = self.render_checked(scene, values, image)?;
+        self.send_mesh(scene, sink);
+        Ok(stats)
+    }
+
+    /// Hands the last render's checked mesh to `sink` as one frame (see
+    /// [`PluginInstance::render_into_sink`]).
+    fn send_mesh(&self, scene: &Scene, sink: &mut dyn GhostSink) {
+        let f = scene.frame;
+        let grids = [CoarseGrid::for_frame(f.width, f.height, 1)];
+        sink.begin(FrameLevels {
+            frame: f,
+            grids: &grids,
+            aperture: &scene.aperture,
+            coverage: Coverage::Exact,
+        });
+        if !self.mesh.open.is_empty() {
+            sink.draw(0, &self.mesh);
+        }
+        sink.finish();
+    }
+
+    /// Calls the plugin's render into `image` (resized and cleared first), growing the mesh
+    /// buffers as it asks, and checks its output: the image into `image`, the mesh into
+    /// `self.mesh` (not drawn).
+    fn render_checked(
+        &mut self,
+        scene: &Scene,
+        values: &[f64],
+        image: &mut HdrImage,
+    ) -> Result<RenderStats, PluginCallError> {
+        self.mesh.clear();
         self.usable()?;
         let (aperture, mask) = self.aperture_input(&scene.aperture)?;
         let (lights, exts) = self.light_inputs(scene)?;
@@ -628,7 +701,7 @@ impl PluginInstance<'_> {
                 output.mesh.vertex_count as usize,
                 output.mesh.triangle_count as usize,
             );
-            let nt = self.check_and_draw(image, counts, &vertices, &triangles)?;
+            let nt = self.check_output(image, counts, &vertices, &triangles)?;
             return Ok(RenderStats {
                 items_drawn: output.items_drawn,
                 mesh_triangles: nt,
@@ -784,10 +857,11 @@ impl PluginInstance<'_> {
     }
 
     /// Checks a successful render's output — mesh counts within the capacities, a finite image,
-    /// a well-formed mesh — and rasterizes the mesh into `image`. Returns the triangle count.
-    fn check_and_draw(
-        &self,
-        image: &mut HdrImage,
+    /// a well-formed mesh — and keeps the mesh in `self.mesh` (its `open` triangles, attributes
+    /// the vertices' RGB). Returns the triangle count.
+    fn check_output(
+        &mut self,
+        image: &HdrImage,
         (nv, nt): (usize, usize),
         vertices: &[MeshVertex],
         triangles: &[[u32; 3]],
@@ -825,12 +899,39 @@ impl PluginInstance<'_> {
                     reason: format!("vertex {v:?} is not finite"),
                 });
             }
-            let positions: Vec<[f32; 2]> = vs.iter().map(|v| [v.x, v.y]).collect();
-            let attrs: Vec<[f32; 3]> = vs.iter().map(|v| v.rgb).collect();
-            rasterize(image, &positions, &attrs, ts, |&c| c);
+            let open = &mut self.mesh.open;
+            open.positions.extend(vs.iter().map(|v| [v.x, v.y]));
+            open.attrs.extend(vs.iter().map(|v| v.rgb));
+            open.triangles.extend_from_slice(ts);
         }
         Ok(nt)
     }
+}
+
+/// The CPU sink of [`PluginInstance::render_into`]: rasterizes a plugin's meshes, with the
+/// frame's (exact) coverage, into the full-resolution image the plugin drew into.
+struct ExactRaster<'a> {
+    pixels: &'a mut [[f32; 3]],
+    width: usize,
+    aperture: &'a Aperture,
+}
+
+impl GhostSink for ExactRaster<'_> {
+    fn begin(&mut self, levels: FrameLevels<'_>) {
+        debug_assert!(levels.coverage == Coverage::Exact && levels.grids.len() == 1);
+    }
+
+    fn draw(&mut self, _level: usize, mesh: &GhostMesh) {
+        rasterize_ghost_mesh_with(
+            self.pixels,
+            self.width,
+            mesh,
+            self.aperture,
+            Coverage::Exact,
+        );
+    }
+
+    fn finish(&mut self) {}
 }
 
 /// An aperture mask for the ABI: width, height and its row-major pixels (borrowed).

@@ -1,6 +1,7 @@
 //! `flarebench compare`: one scene rendered by several flare algorithm plugins, side by side
 //! with the reference renderer, their differences from it, and a table of median time, error
-//! against the reference, items drawn and peak memory.
+//! against the reference, items drawn and peak memory. The plugins' meshes are drawn by the
+//! backend `--backend` chooses (the CPU rasterizer or the GPU), with exact coverage either way.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -16,6 +17,7 @@ use ghost_raytrace::scene::LightSpec;
 use serde::Serialize;
 
 use super::render::{IrisArgs, auto_exposure, parse_size};
+use crate::backend::{BackendChoice, BackendReport, GhostBackend};
 use crate::label;
 use crate::lens_library;
 use crate::output::{ToneMap, ToneOperator, save_image};
@@ -63,6 +65,11 @@ pub struct CompareArgs {
     /// Print the results as one JSON object.
     #[arg(long)]
     pub json: bool,
+    /// Where the plugins' meshes are drawn: auto (a hardware GPU if there is one, else the
+    /// CPU), cpu, or gpu (any adapter, a software one such as lavapipe included); the
+    /// plugins' own pixels are theirs either way. docs/plugins.md.
+    #[arg(long, value_enum, default_value_t = BackendChoice::Auto)]
+    pub backend: BackendChoice,
 }
 
 /// One algorithm's results.
@@ -99,6 +106,8 @@ pub struct CompareReport {
     pub reference_ms: Option<f64>,
     pub output: String,
     pub difference_output: Option<String>,
+    /// What drew the plugins' meshes (`backend`: `cpu` or `gpu`, with the adapter).
+    pub backend: BackendReport,
     pub algorithms: Vec<AlgoResult>,
 }
 
@@ -138,12 +147,13 @@ fn split_spec(spec: &str) -> (&str, &str) {
     spec.split_once(':').unwrap_or((spec, ""))
 }
 
-/// Runs one algorithm: load, prepare, `runs` renders.
+/// Runs one algorithm: load, prepare, `runs` renders, its mesh drawn by `backend`.
 fn run_algo(
     spec: &str,
     args: &CompareArgs,
     lens: &flarebench_sdk::LensSystem,
     scene: &Scene,
+    backend: &mut GhostBackend,
 ) -> (AlgoResult, Option<HdrImage>) {
     let (name, param_text) = split_spec(spec);
     let mut r = AlgoResult {
@@ -160,7 +170,7 @@ fn run_algo(
         peak_rss_mib: None,
         failure: None,
     };
-    let run = |r: &mut AlgoResult| -> anyhow::Result<HdrImage> {
+    let mut run = |r: &mut AlgoResult| -> anyhow::Result<HdrImage> {
         let plugin: LoadedPlugin = plugin_dirs::find(name, &args.plugins)?;
         r.plugin = plugin.name.clone();
         r.path = plugin.path.display().to_string();
@@ -181,7 +191,7 @@ fn run_algo(
         let mut image = HdrImage::new(0, 0);
         for _ in 0..args.runs {
             let t = Instant::now();
-            let out = inst.render_into(scene, &values, &mut image)?;
+            let out = backend.render_plugin(&mut inst, scene, &values, &mut image)?;
             r.times_ms.push(ms(t));
             r.items_drawn = out.items_drawn;
             r.mesh_triangles = out.mesh_triangles;
@@ -288,13 +298,14 @@ pub fn run(args: &CompareArgs, quiet: bool) -> anyhow::Result<()> {
         (Some(img), Some(ms(t)))
     };
 
+    let mut backend = GhostBackend::open(args.backend)?;
     let mut results = Vec::new();
     let mut images = Vec::new();
     for spec in &args.algos {
         if !quiet && !args.json {
             eprintln!("{spec} …");
         }
-        let (mut r, img) = run_algo(spec, args, sys, &scene);
+        let (mut r, img) = run_algo(spec, args, sys, &scene, &mut backend);
         if let (Some(img), Some(reference)) = (&img, &reference) {
             let c = img.compare(reference)?;
             r.error = Some(ErrorReport {
@@ -358,6 +369,7 @@ pub fn run(args: &CompareArgs, quiet: bool) -> anyhow::Result<()> {
         reference_ms,
         output: args.output.display().to_string(),
         difference_output,
+        backend: backend.report().clone(),
         algorithms: results,
     };
     if args.json {
@@ -387,6 +399,11 @@ fn text(r: &CompareReport) -> String {
         s.push_str(&format!("; reference {t:.1} ms"));
     }
     s.push('\n');
+    // The first line of the backend's report, `backend: gpu on <adapter> (…)`.
+    if let Some(line) = r.backend.text().lines().next() {
+        let what = line.strip_prefix("backend: ").unwrap_or(line);
+        s.push_str(&format!("plugin meshes drawn by: {what}\n"));
+    }
     let mut t = Table::new(&[
         "algorithm",
         "median ms",
