@@ -80,7 +80,9 @@ fn layout_entries(second: wgpu::BindingType) -> [wgpu::BindGroupLayoutEntry; 2] 
     ]
 }
 
-fn pipeline(
+/// A render pipeline of one module's vertex and fragment entries (`entries`), one bind group
+/// (`layout`) and one colour target, drawing whole triangles without vertex buffers.
+pub(crate) fn pipeline(
     device: &wgpu::Device,
     layout: &wgpu::BindGroupLayout,
     source: &str,
@@ -142,11 +144,7 @@ impl Compositor {
             &splat_layout,
             include_str!("shaders/starburst.wgsl"),
             ("vs_splat", "fs_splat"),
-            wgpu::ColorTargetState {
-                format: crate::targets::TARGET_FORMAT,
-                blend: Some(crate::pipelines::ADD),
-                write_mask: wgpu::ColorWrites::ALL,
-            },
+            crate::pipelines::additive_target(),
         );
         let tone = pipeline(
             device,
@@ -403,41 +401,10 @@ impl Compositor {
             pass.set_bind_group(0, &group, &[0]);
             pass.draw(0..3, 0..1);
         }
-        encoder.copy_texture_to_buffer(
-            wgpu::TexelCopyTextureInfo {
-                texture,
-                mip_level: 0,
-                origin: wgpu::Origin3d::ZERO,
-                aspect: wgpu::TextureAspect::All,
-            },
-            wgpu::TexelCopyBufferInfo {
-                buffer,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(row),
-                    rows_per_image: Some(height),
-                },
-            },
-            wgpu::Extent3d {
-                width,
-                height,
-                depth_or_array_layers: 1,
-            },
-        );
+        crate::targets::copy_rows(&mut encoder, texture, buffer, (width, height), row);
         ctx.queue.submit([encoder.finish()]);
         let slice = buffer.slice(..size);
-        let (tx, rx) = std::sync::mpsc::channel();
-        slice.map_async(wgpu::MapMode::Read, move |r| {
-            let _ = tx.send(r);
-        });
-        ctx.wait()?;
-        rx.recv()
-            .map_err(|e| GpuError::Readback {
-                what: e.to_string(),
-            })?
-            .map_err(|e| GpuError::Readback {
-                what: e.to_string(),
-            })?;
+        ctx.map_read(&slice)?;
         let mut rgb = Vec::with_capacity(width as usize * height as usize * 3);
         {
             let data = slice.get_mapped_range().map_err(|e| GpuError::Readback {

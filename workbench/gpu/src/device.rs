@@ -142,6 +142,20 @@ impl GpuContext {
         }
     }
 
+    /// Maps `slice` for reading once the work submitted so far has filled it, and waits for
+    /// it; read it with `get_mapped_range`, then unmap its buffer.
+    pub fn map_read(&self, slice: &wgpu::BufferSlice<'_>) -> Result<(), GpuError> {
+        let (tx, rx) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        self.wait()?;
+        let readback = |what: String| GpuError::Readback { what };
+        rx.recv()
+            .map_err(|e| readback(e.to_string()))?
+            .map_err(|e| readback(e.to_string()))
+    }
+
     /// Waits until the GPU has finished everything submitted.
     pub fn wait(&self) -> Result<(), GpuError> {
         self.device

@@ -94,7 +94,7 @@ fn uniform_entry(
 }
 
 /// Additive blending of colour; alpha is kept at 0.
-pub const ADD: wgpu::BlendState = wgpu::BlendState {
+const ADD: wgpu::BlendState = wgpu::BlendState {
     color: wgpu::BlendComponent {
         src_factor: wgpu::BlendFactor::One,
         dst_factor: wgpu::BlendFactor::One,
@@ -107,12 +107,13 @@ pub const ADD: wgpu::BlendState = wgpu::BlendState {
     },
 };
 
-fn additive_target() -> Option<wgpu::ColorTargetState> {
-    Some(wgpu::ColorTargetState {
+/// A linear target ([`TARGET_FORMAT`]) blended additively.
+pub(crate) fn additive_target() -> wgpu::ColorTargetState {
+    wgpu::ColorTargetState {
         format: TARGET_FORMAT,
         blend: Some(ADD),
         write_mask: wgpu::ColorWrites::ALL,
-    })
+    }
 }
 
 impl Pipelines {
@@ -179,37 +180,13 @@ impl Pipelines {
                 Kind::Fringe,
             ),
         ];
-        let upsample_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("upsample"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("shaders/upsample.wgsl").into()),
-        });
-        let upsample_pipeline_layout =
-            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("upsample"),
-                bind_group_layouts: &[Some(&upsample_layout)],
-                immediate_size: 0,
-            });
-        let upsample = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("upsample"),
-            layout: Some(&upsample_pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &upsample_module,
-                entry_point: Some("vs_full"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: None,
-            multisample: wgpu::MultisampleState::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &upsample_module,
-                entry_point: Some("fs_upsample"),
-                compilation_options: Default::default(),
-                targets: &[additive_target()],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let upsample = crate::compose::pipeline(
+            device,
+            &upsample_layout,
+            include_str!("shaders/upsample.wgsl"),
+            ("vs_full", "fs_upsample"),
+            additive_target(),
+        );
         Pipelines {
             raster_layout,
             fringe_layout,
@@ -331,7 +308,7 @@ fn raster_pipeline(
             module,
             entry_point: Some(kind.entry()),
             compilation_options: options,
-            targets: &[additive_target()],
+            targets: &[Some(additive_target())],
         }),
         multiview_mask: None,
         cache: None,

@@ -137,41 +137,10 @@ impl LevelTargets {
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("readback"),
             });
-        encoder.copy_texture_to_buffer(
-            wgpu::TexelCopyTextureInfo {
-                texture: &output.texture,
-                mip_level: 0,
-                origin: wgpu::Origin3d::ZERO,
-                aspect: wgpu::TextureAspect::All,
-            },
-            wgpu::TexelCopyBufferInfo {
-                buffer,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(row),
-                    rows_per_image: Some(h),
-                },
-            },
-            wgpu::Extent3d {
-                width: w,
-                height: h,
-                depth_or_array_layers: 1,
-            },
-        );
+        copy_rows(&mut encoder, &output.texture, buffer, (w, h), row);
         ctx.queue.submit([encoder.finish()]);
         let slice = buffer.slice(..size);
-        let (tx, rx) = std::sync::mpsc::channel();
-        slice.map_async(wgpu::MapMode::Read, move |r| {
-            let _ = tx.send(r);
-        });
-        ctx.wait()?;
-        rx.recv()
-            .map_err(|e| GpuError::Readback {
-                what: e.to_string(),
-            })?
-            .map_err(|e| GpuError::Readback {
-                what: e.to_string(),
-            })?;
+        ctx.map_read(&slice)?;
         let mut img = HdrImage::new(width, height);
         {
             let data = slice.get_mapped_range().map_err(|e| GpuError::Readback {
@@ -189,4 +158,36 @@ impl LevelTargets {
         buffer.unmap();
         Ok(img)
     }
+}
+
+/// Copies a `width × height` texture into `buffer`, each row padded to `row` bytes (a multiple
+/// of `COPY_BYTES_PER_ROW_ALIGNMENT`).
+pub fn copy_rows(
+    encoder: &mut wgpu::CommandEncoder,
+    texture: &wgpu::Texture,
+    buffer: &wgpu::Buffer,
+    (width, height): (u32, u32),
+    row: u32,
+) {
+    encoder.copy_texture_to_buffer(
+        wgpu::TexelCopyTextureInfo {
+            texture,
+            mip_level: 0,
+            origin: wgpu::Origin3d::ZERO,
+            aspect: wgpu::TextureAspect::All,
+        },
+        wgpu::TexelCopyBufferInfo {
+            buffer,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(row),
+                rows_per_image: Some(height),
+            },
+        },
+        wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        },
+    );
 }

@@ -85,18 +85,7 @@ impl PassTimer {
             return Ok(Vec::new());
         }
         let slice = self.read.slice(..n as u64 * 8);
-        let (tx, rx) = std::sync::mpsc::channel();
-        slice.map_async(wgpu::MapMode::Read, move |r| {
-            let _ = tx.send(r);
-        });
-        ctx.wait()?;
-        rx.recv()
-            .map_err(|e| GpuError::Readback {
-                what: e.to_string(),
-            })?
-            .map_err(|e| GpuError::Readback {
-                what: e.to_string(),
-            })?;
+        ctx.map_read(&slice)?;
         let times: Vec<PassTiming> = {
             let data = slice.get_mapped_range().map_err(|e| GpuError::Readback {
                 what: e.to_string(),

@@ -204,6 +204,41 @@ fn sample(in: VsOut) -> Sample {
     let e2 = q2 - q0;
     let area2 = cross2(e1, e2);
     let sign = select(-1.0, 1.0, area2 > 0.0);
+    // A pixel wholly inside the triangle adds its whole area at its centre (as the CPU's full
+    // runs do), one wholly beyond an edge nothing: only pixels on an edge are clipped (most
+    // fragments of a large triangle drawn with exact coverage are inside it).
+    var whole = true;
+    for (var e = 0u; e < 3u; e++) {
+        var a = q0;
+        var b = q1;
+        if e == 1u {
+            a = q1;
+            b = q2;
+        } else if e == 2u {
+            a = q2;
+            b = q0;
+        }
+        let d = b - a;
+        var inside = 0u;
+        for (var k = 0u; k < 4u; k++) {
+            let corner = vec2<f32>(f32(k & 1u), f32(k >> 1u));
+            if sign * cross2(d, corner - a) >= 0.0 {
+                inside += 1u;
+            }
+        }
+        if inside == 0u {
+            s.weight = 0.0;
+            return s;
+        }
+        whole = whole && inside == 4u;
+    }
+    if whole {
+        let c = vec2<f32>(0.5) - q0;
+        let inv_whole = 1.0 / area2;
+        s.weight = 1.0;
+        s.a = interpolate(t, cross2(c, e2) * inv_whole, cross2(e1, c) * inv_whole);
+        return s;
+    }
     var poly: Poly;
     poly.n = 4u;
     poly.v[0] = vec2<f32>(0.0, 0.0);
