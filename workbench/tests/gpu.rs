@@ -214,3 +214,40 @@ fn apply_on_the_gpu_matches_the_cpu() {
         "{c:?}"
     );
 }
+
+/// `bench --backend cpu,gpu --aperture circle,iris,mask --starburst`: a row per backend and
+/// aperture, the GPU's with its adapter and pass times, the starburst timed (its pattern kept
+/// from run to run), the same ghosts planned on both backends.
+#[test]
+fn bench_times_both_backends_and_every_aperture() {
+    let rows = json(&[
+        "bench",
+        "heliar-tronnier",
+        "--light",
+        "8,60",
+        "--size",
+        "240x135",
+        "--quality",
+        "fast",
+        "--runs",
+        "2",
+        "--backend",
+        "cpu,gpu",
+        "--aperture",
+        "circle,iris,mask",
+        "--starburst",
+        "--json",
+    ]);
+    let rows = rows.as_array().unwrap();
+    assert_eq!(rows.len(), 6);
+    for r in rows {
+        let b = &r["backend"];
+        let gpu = b["backend"] == "gpu";
+        assert_eq!(r["gpu_ms"].is_f64(), gpu, "{r}");
+        assert_eq!(b["adapter"].is_string(), gpu, "{r}");
+        assert!(r["starburst_ms"].as_f64().unwrap() >= 0.0);
+        assert!(r["ghosts_drawn"].as_u64().unwrap() > 0);
+    }
+    let apertures: Vec<&str> = rows.iter().map(|r| r["aperture"].as_str().unwrap()).collect();
+    assert_eq!(apertures, ["circle", "circle", "iris", "iris", "mask", "mask"]);
+}

@@ -28,9 +28,11 @@ use ghost_raytrace::plan::LightPlan;
 use super::render::{frame_for, parse_downscale, parse_size};
 use crate::aperture_file::{MaskEncoding, load_aperture_mask};
 use crate::backend::{BackendChoice, BackendReport, GhostBackend};
+use crate::compose::StarburstSetup;
 use crate::lens_library;
 use crate::precomputed::load_precomputed;
 use crate::table::Table;
+use flarebench_sdk::starburst::{StarburstCache, StarburstSettings};
 
 #[derive(Debug, Args)]
 pub struct BenchArgs {
@@ -81,6 +83,12 @@ pub struct BenchArgs {
     /// (OpenLensFlare's aperture image, lenses/masks/aperture.bmp).
     #[arg(long, value_delimiter = ',', default_values_t = [BenchAperture::Circle])]
     pub aperture: Vec<BenchAperture>,
+    /// Also add the light's diffraction starburst every run and time it (64 wavelengths, 256
+    /// texels; the pattern kept in a cache from run to run, as a live preview keeps it, so
+    /// only the first run computes it). Give a light in the frame (e.g. `--light 8,60` for the
+    /// Heliar): the default light's image is outside it.
+    #[arg(long)]
+    pub starburst: bool,
     /// Print the results as JSON.
     #[arg(long)]
     pub json: bool,
@@ -139,6 +147,9 @@ pub struct BenchRow {
     /// passes (milliseconds; the render time also holds the readback).
     pub mesh_ms: Option<f64>,
     pub gpu_ms: Option<f64>,
+    /// With `--starburst`: the median time of adding the starburst (milliseconds; part of the
+    /// frame time).
+    pub starburst_ms: Option<f64>,
     /// Reflections per ghost path planned for (2, or 4 for two and four).
     pub reflections: ReflectionOrder,
     /// True when the plan looked the bounds up in `--precomputed`'s table.
@@ -227,6 +238,7 @@ pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
                         sys: &sys,
                         aperture: &aperture,
                         lights,
+                        starburst: args.starburst,
                         opts: &opts,
                         options: ghosts::RenderOptions {
                             band_by_band: args.band_by_band,
@@ -257,6 +269,7 @@ pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
                         backend: timed.report,
                         mesh_ms: timed.mesh_ms,
                         gpu_ms: timed.gpu_ms,
+                        starburst_ms: timed.starburst_ms,
                         reflections: args.reflections,
                         precomputed: table.is_some(),
                         width: frame.width,
@@ -295,6 +308,7 @@ pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
         "frame ms",
         "mesh ms",
         "GPU ms",
+        "starburst ms",
         "rel RMSE",
         "energy",
     ]);
@@ -314,6 +328,8 @@ pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
             format!("{:.1}", r.frame_ms),
             r.mesh_ms.map_or("—".to_string(), |v| format!("{v:.1}")),
             r.gpu_ms.map_or("—".to_string(), |v| format!("{v:.1}")),
+            r.starburst_ms
+                .map_or("—".to_string(), |v| format!("{v:.1}")),
             pct(r.relative_rmse),
             pct(r.energy_error),
         ]);
@@ -356,6 +372,8 @@ struct Case<'a> {
     sys: &'a LensSystem,
     aperture: &'a Aperture,
     lights: &'a [LightSpec],
+    /// Add and time the lights' starbursts.
+    starburst: bool,
     opts: &'a PlanOptions<'a>,
     options: ghosts::RenderOptions,
 }
@@ -367,6 +385,7 @@ struct Timed {
     frame_ms: f64,
     mesh_ms: Option<f64>,
     gpu_ms: Option<f64>,
+    starburst_ms: Option<f64>,
     plans: Vec<LightPlan>,
     report: BackendReport,
 }
@@ -381,6 +400,13 @@ impl Case<'_> {
         let (mut mesh_ms, mut gpu_ms) = (vec![], vec![]);
         let mut img = HdrImage::new(frame.width, frame.height);
         let mut scratch = ghosts::RenderScratch::default();
+        let mut cache = StarburstCache::new();
+        let setup = StarburstSetup {
+            aperture: self.aperture,
+            dust: None,
+            settings: StarburstSettings::default(),
+        };
+        let mut starburst_ms = vec![];
         let mut last = None;
         for _ in 0..runs {
             let t0 = Instant::now();
@@ -407,6 +433,18 @@ impl Case<'_> {
                     &mut img.pixels,
                 )?;
             }
+            if self.starburst {
+                let t = Instant::now();
+                backend.add_starbursts(
+                    &mut img,
+                    self.sys,
+                    &frame,
+                    self.lights,
+                    &setup,
+                    &mut cache,
+                )?;
+                starburst_ms.push(t.elapsed().as_secs_f64() * 1e3);
+            }
             let t2 = Instant::now();
             anyhow::ensure!(!img.has_non_finite(), "non-finite pixels");
             plan_ms.push((t1 - t0).as_secs_f64() * 1e3);
@@ -420,6 +458,7 @@ impl Case<'_> {
             frame_ms: median(frame_ms),
             mesh_ms: (!mesh_ms.is_empty()).then(|| median(mesh_ms)),
             gpu_ms: (!gpu_ms.is_empty()).then(|| median(gpu_ms)),
+            starburst_ms: (!starburst_ms.is_empty()).then(|| median(starburst_ms)),
             plans: last.expect("at least one run"),
             report: backend.report().clone(),
         })
