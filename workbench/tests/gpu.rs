@@ -248,6 +248,12 @@ fn bench_times_both_backends_and_every_aperture() {
         assert!(r["starburst_ms"].as_f64().unwrap() >= 0.0);
         assert!(r["ghosts_drawn"].as_u64().unwrap() > 0);
     }
-    let apertures: Vec<&str> = rows.iter().map(|r| r["aperture"].as_str().unwrap()).collect();
-    assert_eq!(apertures, ["circle", "circle", "iris", "iris", "mask", "mask"]);
+    let apertures: Vec<&str> = rows
+        .iter()
+        .map(|r| r["aperture"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        apertures,
+        ["circle", "circle", "iris", "iris", "mask", "mask"]
+    );
 }
