@@ -56,7 +56,7 @@ pub struct Compositor {
     /// The patterns `patterns` holds, in order.
     resident: Vec<Arc<StarburstPattern>>,
     tone_target: Option<(u32, u32, wgpu::Texture, wgpu::TextureView)>,
-    readback: Option<wgpu::Buffer>,
+    readback: Option<GrowBuffer>,
 }
 
 fn layout_entries(second: wgpu::BindingType) -> [wgpu::BindGroupLayoutEntry; 2] {
@@ -366,15 +366,11 @@ impl Compositor {
         });
         let row = (width * 4).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
         let size = u64::from(row) * u64::from(height);
-        if self.readback.as_ref().is_none_or(|b| b.size() < size) {
-            self.readback = Some(ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("tone readback"),
-                size,
-                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            }));
-        }
-        let buffer = self.readback.as_ref().expect("made above");
+        let buffer = self.readback.get_or_insert_with(|| {
+            GrowBuffer::new(&ctx.device, "tone readback", wgpu::BufferUsages::MAP_READ)
+        });
+        buffer.reserve(&ctx.device, size);
+        let buffer = buffer.buffer();
         let mut encoder = ctx
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {

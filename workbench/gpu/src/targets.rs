@@ -3,6 +3,7 @@
 
 use flarebench_sdk::image::{CoarseGrid, HdrImage};
 
+use crate::buffers::GrowBuffer;
 use crate::{GpuContext, GpuError};
 
 /// Linear RGBA, 32-bit float: blended additively (the device asks for FLOAT32_BLENDABLE).
@@ -56,7 +57,7 @@ pub struct LevelTargets {
     /// Coarse targets of earlier frames not used by this one, kept for the next.
     spare: Vec<Target>,
     output: Option<Target>,
-    readback: Option<wgpu::Buffer>,
+    readback: Option<GrowBuffer>,
 }
 
 impl LevelTargets {
@@ -123,15 +124,11 @@ impl LevelTargets {
         let (w, h) = (output.width, output.height);
         let row = (w * TEXEL_BYTES).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
         let size = u64::from(row) * u64::from(h);
-        if self.readback.as_ref().is_none_or(|b| b.size() < size) {
-            self.readback = Some(ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("readback"),
-                size,
-                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            }));
-        }
-        let buffer = self.readback.as_ref().expect("made above");
+        let buffer = self.readback.get_or_insert_with(|| {
+            GrowBuffer::new(&ctx.device, "readback", wgpu::BufferUsages::MAP_READ)
+        });
+        buffer.reserve(&ctx.device, size);
+        let buffer = buffer.buffer();
         let mut encoder = ctx
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
