@@ -10,6 +10,7 @@ pub mod compose;
 pub mod edit;
 pub mod input_image;
 pub mod label;
+pub mod lens_drawing;
 pub mod lens_library;
 pub mod output;
 pub mod plugin_dirs;
