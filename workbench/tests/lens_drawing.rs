@@ -1,9 +1,14 @@
 //! The lens drawing: profiles, element outlines and their triangles, the stop and sensor
-//! marks, on constructed lenses and every bundled one.
+//! marks, ray fans and their ends, on constructed lenses and every bundled one.
 
-use flarebench::lens_drawing::{Bounds, ElementFill, LensDrawing, SurfaceLine};
+use flarebench::lens_drawing::{
+    Bounds, DEFAULT_FAN_RAYS, ElementFill, LensDrawing, RayEnd, RayFan, SurfaceLine, default_fans,
+    ghost_fan, ray_fans, standard_fields, trace_path,
+};
 use flarebench::lens_library;
+use flarebench_sdk::ghost::{GhostPath, enumerate_ghosts};
 use flarebench_sdk::paraxial::analyse;
+use flarebench_sdk::trace::{Ray, Sequence};
 use flarebench_sdk::{LensSystem, Medium, Surface, SurfaceKind};
 use proptest::prelude::*;
 
@@ -170,8 +175,8 @@ fn assert_simple(outline: &[[f64; 2]], what: &str) {
     }
 }
 
-/// Every point the drawing holds lies in `bounds`.
-fn assert_bounded(d: &LensDrawing, what: &str) {
+/// Every point the drawing and the fans hold lies in `bounds`.
+fn assert_bounded(d: &LensDrawing, fans: &[RayFan], what: &str) {
     let b: Bounds = d.bounds;
     let mut points: Vec<[f64; 2]> = Vec::new();
     points.extend(d.surfaces.iter().flat_map(|s| s.points.iter().copied()));
@@ -180,6 +185,11 @@ fn assert_bounded(d: &LensDrawing, what: &str) {
         points.extend(s.jaws().into_iter().flatten());
     }
     points.extend(d.sensor.line());
+    points.extend(
+        fans.iter()
+            .flat_map(|f| &f.rays)
+            .flat_map(|r| r.points.iter().copied()),
+    );
     for p in points {
         assert!(
             p[0].is_finite() && p[1].is_finite(),
@@ -376,7 +386,8 @@ fn a_semi_diameter_beyond_the_sphere_is_clipped_where_the_sag_exists() {
         assert_triangles_cover(e, "ball");
         assert_stacked(e, "ball");
     }
-    assert_bounded(&d, "ball");
+    let fans = default_fans(&sys);
+    assert_bounded(&d, &fans, "ball");
 }
 
 #[test]
@@ -417,6 +428,140 @@ fn stop_and_sensor_marks() {
 }
 
 #[test]
+fn axial_fan_converges_near_the_paraxial_back_focus() {
+    // f/12 or so: little spherical aberration.
+    let sys = singlet(2.5);
+    let p = analyse(&sys, D_LINE).unwrap();
+    let fans = ray_fans(&sys, &[0.0], &[D_LINE], 9);
+    assert_eq!(fans.len(), 1);
+    assert_eq!(fans[0].rays.len(), 9);
+    let focus = 8.0 + p.bfl_mm;
+    for r in &fans[0].rays {
+        assert_eq!(r.end, RayEnd::Sensor);
+        // lead-in, stop, two surfaces, sensor.
+        assert_eq!(r.points.len(), 5);
+        assert!(r.points[0][0] < 0.0, "starts in front of the lens");
+        let [a, b] = [r.points[3], r.points[4]];
+        if a[1].abs() < 1e-9 {
+            continue; // the axial ray
+        }
+        let z_cross = a[0] - a[1] * (b[0] - a[0]) / (b[1] - a[1]);
+        assert!(
+            (z_cross - focus).abs() < 0.002 * p.efl_mm,
+            "crosses at {z_cross}, paraxial focus {focus}"
+        );
+        // And lands near the axis.
+        assert!(b[1].abs() < 0.05, "{b:?}");
+    }
+}
+
+#[test]
+fn a_ray_beyond_the_semi_diameter_ends_vignetted_there() {
+    let sys = singlet(20.0);
+    let seq = Sequence::forward(&sys, D_LINE);
+    let r = trace_path(&seq, &Ray::collimated(0.0, 0.0, 13.0), [-5.0, 13.0]);
+    assert_eq!(r.end, RayEnd::Vignetted { row: 1 });
+    assert_eq!(r.points.len(), 3, "lead-in, stop, surface 1");
+    let last = *r.points.last().unwrap();
+    assert!((last[0] - (2.0 + sphere_sag(50.0, 13.0))).abs() < 1e-9);
+    assert!((last[1] - 13.0).abs() < 1e-12);
+    // Outside the stop's opening: vignetted at the stop.
+    let sys = singlet(10.0);
+    let seq = Sequence::forward(&sys, D_LINE);
+    let r = trace_path(&seq, &Ray::collimated(0.0, 0.0, 11.0), [-5.0, 11.0]);
+    assert_eq!(r.end, RayEnd::Vignetted { row: 0 });
+    assert_eq!(r.points, vec![[-5.0, 11.0], [0.0, 11.0]]);
+}
+
+#[test]
+fn total_internal_reflection_ends_the_ray_on_that_surface() {
+    // A flat-fronted block of n 1.8 with a strongly convex back (R −10): a ray parallel to the
+    // axis 7 mm up meets the back at 44° from its normal, past the critical angle (33.7°).
+    let sys = LensSystem::new(
+        "tir",
+        vec![
+            Surface::stop(1.0, 9.0),
+            Surface::spherical(0.0, 12.0, glass(1.8), 9.0),
+            Surface::spherical(-10.0, 20.0, Medium::Air, 9.0),
+            Surface::sensor(20.0),
+        ],
+    );
+    sys.validate().unwrap();
+    let seq = Sequence::forward(&sys, D_LINE);
+    let r = trace_path(&seq, &Ray::collimated(0.0, 0.0, 7.0), [-3.0, 7.0]);
+    assert_eq!(r.end, RayEnd::TotalInternalReflection { row: 2 });
+    assert_eq!(r.end.row(), Some(2));
+    let last = *r.points.last().unwrap();
+    assert!(
+        (last[0] - (13.0 + sphere_sag(-10.0, 7.0))).abs() < 1e-9,
+        "{last:?}"
+    );
+    assert!((last[1] - 7.0).abs() < 1e-9);
+    // The tracer completed the lead-in, the stop and the front face; the last point is where
+    // it reflected.
+    assert_eq!(r.completed, 3);
+    assert_eq!(r.points.len(), 4);
+    assert_eq!(r.completed_points(), &r.points[..3]);
+    // Near the axis the same lens refracts.
+    let r = trace_path(&seq, &Ray::collimated(0.0, 0.0, 3.0), [-3.0, 3.0]);
+    assert_eq!(r.end, RayEnd::Sensor);
+}
+
+#[test]
+fn a_ray_that_misses_a_surface_ends_at_its_vertex_plane() {
+    // A hemisphere-like front (R 5, semi-diameter 4.9) and a ray 6 mm up: its line never
+    // meets the sphere.
+    let sys = LensSystem::new(
+        "miss",
+        vec![
+            Surface::spherical(5.0, 5.0, glass(1.5), 4.9),
+            Surface::spherical(0.0, 5.0, Medium::Air, 4.9),
+            Surface::stop(10.0, 3.0),
+            Surface::sensor(20.0),
+        ],
+    );
+    sys.validate().unwrap();
+    let seq = Sequence::forward(&sys, D_LINE);
+    let r = trace_path(&seq, &Ray::collimated(0.0, 0.0, 6.0), [-3.0, 6.0]);
+    assert_eq!(r.end, RayEnd::Missed { row: 0 });
+    assert_eq!(r.points, vec![[-3.0, 6.0], [0.0, 6.0]]);
+    assert_eq!(r.completed, 1);
+}
+
+#[test]
+fn a_ghost_fan_goes_back_and_forth() {
+    let sys = lens_library::load("heliar-tronnier", true).unwrap().system;
+    let fan = ghost_fan(&sys, GhostPath::two(4, 1), 0.0, D_LINE, 5);
+    assert_eq!(fan.rays.len(), 5);
+    assert_eq!((fan.field_deg, fan.wavelength_nm), (0.0, D_LINE));
+    for r in &fan.rays {
+        assert!(
+            r.points.windows(2).any(|w| w[1][0] < w[0][0] - 1e-9),
+            "no backward leg: {:?}",
+            r.points
+        );
+    }
+    // Surfaces 0..=4, back 3..=1, forward 2..=8 and the sensor, after the lead-in: the
+    // unvignetted rays have them all and end on the sensor.
+    let through: Vec<_> = fan
+        .rays
+        .iter()
+        .filter(|r| r.end == RayEnd::Sensor)
+        .collect();
+    assert!(!through.is_empty());
+    for r in through {
+        assert_eq!(r.points.len(), 1 + 5 + 3 + 8);
+        assert!((r.points.last().unwrap()[0] - sys.total_track()).abs() < 1e-9);
+    }
+    // A path the lens does not have: no rays.
+    assert!(
+        ghost_fan(&sys, GhostPath::two(1, 4), 0.0, D_LINE, 5)
+            .rays
+            .is_empty()
+    );
+}
+
+#[test]
 fn surface_at_finds_the_surface_under_a_point() {
     let sys = singlet(10.0);
     let d = LensDrawing::new(&sys);
@@ -443,6 +588,24 @@ fn surface_at_finds_the_surface_under_a_point() {
 }
 
 #[test]
+fn standard_fields_follow_the_film_diagonal() {
+    let sys = singlet(10.0);
+    let p = analyse(&sys, D_LINE).unwrap();
+    let [a, b, c] = standard_fields(&sys).unwrap();
+    let full = (0.5 * 36f64.hypot(24.0) / p.efl_mm).atan().to_degrees();
+    assert_eq!(a, 0.0);
+    assert!((c - full).abs() < 1e-12);
+    assert!((b - 0.7 * full).abs() < 1e-12);
+    // No paraxial data without a stop.
+    let mut no_stop = sys.clone();
+    no_stop.surfaces.remove(0);
+    assert_eq!(standard_fields(&no_stop), None);
+    let d = LensDrawing::new(&no_stop);
+    assert!(d.stop.is_none());
+    assert_bounded(&d, &default_fans(&no_stop), "no stop");
+}
+
+#[test]
 fn every_bundled_lens_draws() {
     for (name, sys) in bundled() {
         let d = LensDrawing::new(&sys);
@@ -464,7 +627,41 @@ fn every_bundled_lens_draws() {
             assert_stacked(e, &what);
             assert_simple(&e.outline, &what);
         }
-        assert_bounded(&d, &name);
+        let fans = default_fans(&sys);
+        assert_eq!(fans.len(), 3, "{name}");
+        assert_bounded(&d, &fans, &name);
+        // The axial fan reaches the sensor: all of it, except where the paraxial entrance
+        // pupil is wider than the front element (the Kreitzer telephoto's file scales the
+        // surfaces by 4 but not the semi-diameters: its pupil is 129 mm across, its front
+        // element 71 mm), whose outer rays are blocked there.
+        let ends: Vec<RayEnd> = fans[0].rays.iter().map(|r| r.end).collect();
+        let p = analyse(&sys, sys.default_wavelength_nm()).unwrap();
+        if 0.5 * p.entrance_pupil_diameter_mm < sys.surfaces[0].semi_diameter {
+            assert!(
+                ends.iter().all(|&e| e == RayEnd::Sensor),
+                "{name}: {ends:?}"
+            );
+        } else {
+            assert_eq!(
+                ends[DEFAULT_FAN_RAYS / 2],
+                RayEnd::Sensor,
+                "{name}: {ends:?}"
+            );
+        }
+        // Other fans and every ghost, at the full field: no panic, finite points.
+        let fields = standard_fields(&sys).unwrap();
+        let more = ray_fans(&sys, &fields, &[450.0, 650.0], 5);
+        assert_eq!(more.len(), 6);
+        for g in enumerate_ghosts(&sys) {
+            let fan = ghost_fan(&sys, g, fields[2], D_LINE, 3);
+            for r in fan.rays.iter().chain(more.iter().flat_map(|f| &f.rays)) {
+                assert!(r.points.len() >= 2, "{name} {g}");
+                assert!(
+                    r.points.iter().flatten().all(|v| v.is_finite()),
+                    "{name} {g}"
+                );
+            }
+        }
     }
 }
 
@@ -514,7 +711,11 @@ proptest! {
             assert_triangles_cover(e, "random");
             assert_stacked(e, "random");
         }
-        assert_bounded(&d, "random");
+        let fans = default_fans(&sys);
+        assert_bounded(&d, &fans, "random");
+        for g in enumerate_ghosts(&sys).into_iter().take(6) {
+            let _ = ghost_fan(&sys, g, 5.0, 500.0, 3);
+        }
         let _ = d.surface_at(1.0, 1.0, 0.1);
     }
 }
@@ -524,6 +725,13 @@ fn degenerate_systems_do_not_panic() {
     let empty = LensSystem::new("empty", Vec::new());
     let d = LensDrawing::new(&empty);
     assert!(d.surfaces.is_empty() && d.elements.is_empty() && d.stop.is_none());
+    assert!(ray_fans(&empty, &[0.0], &[D_LINE], 3)[0].rays.is_empty());
     let sensor_only = LensSystem::new("sensor", vec![Surface::sensor(0.0)]);
     let _ = LensDrawing::new(&sensor_only);
+    let _ = default_fans(&sensor_only);
+    // Odd fields and wavelengths give empty fans.
+    let sys = singlet(10.0);
+    let fans = ray_fans(&sys, &[95.0, f64::NAN], &[-1.0, D_LINE], 3);
+    assert_eq!(fans.len(), 4);
+    assert!(fans.iter().all(|f| f.rays.is_empty()));
 }

@@ -1,20 +1,27 @@
 //! The lens drawn in meridional section, for the viewer window: every surface's profile, the
-//! glass elements as filled outlines, the aperture stop's jaws and the sensor.
+//! glass elements as filled outlines, the aperture stop's jaws, the sensor, and ray fans
+//! (forward at the standard fields, or along one ghost's path).
 //!
 //! Pure geometry on a [`LensSystem`], no UI: lengths in mm, points `[z, y]` with z along the
 //! optical axis (toward the sensor, the first vertex at 0) and y the meridional height.
 //!
 //! - [`profile`]: surface profiles, sampled adaptively, clipped where the sag is undefined;
-//! - [`element`]: glass elements as closed outlines with their triangles.
+//! - [`element`]: glass elements as closed outlines with their triangles;
+//! - [`rays`]: ray fans traced through the lens, each ray to where it ends.
 
 pub mod element;
 pub mod profile;
+pub mod rays;
 
 use flarebench_sdk::paraxial::stop_opening;
 use flarebench_sdk::{LensSystem, SurfaceKind};
 
 pub use element::ElementFill;
 pub use profile::{drawn_semi_diameter, profile_uniform, rim};
+pub use rays::{
+    DEFAULT_FAN_RAYS, RayEnd, RayFan, RayPath, default_fans, ghost_fan, lead_in, pupil_fan,
+    ray_fans, standard_fields, trace_path,
+};
 
 /// The lens as a drawing shows it.
 #[derive(Clone, Debug, PartialEq)]
@@ -29,7 +36,7 @@ pub struct LensDrawing {
     pub stop: Option<StopMark>,
     /// The sensor plane.
     pub sensor: SensorMark,
-    /// Everything above, for fitting the view.
+    /// Everything above and the [`default_fans`], for fitting the view.
     pub bounds: Bounds,
 }
 
@@ -163,6 +170,11 @@ impl LensDrawing {
         let elements = element::elements(system, &z);
         let stop = StopMark::of(system);
         let sensor = SensorMark::of(system);
+        let fans = if system.surfaces.is_empty() {
+            Vec::new()
+        } else {
+            default_fans(system)
+        };
         let marks: Vec<[f64; 2]> = stop
             .iter()
             .flat_map(|s| s.jaws().into_iter().flatten())
@@ -173,7 +185,8 @@ impl LensDrawing {
                 .iter()
                 .flat_map(|s| &s.points)
                 .chain(elements.iter().flat_map(|e| &e.outline))
-                .chain(&marks),
+                .chain(&marks)
+                .chain(fans.iter().flat_map(|f| &f.rays).flat_map(|r| &r.points)),
         );
         LensDrawing {
             surfaces,
