@@ -1,17 +1,26 @@
 //! What the editor shows about the lens, recomputed after every edit: paraxial data, the lens
 //! outline and a fan of traced rays for the side view, the ghost list and the selected ghost's
-//! ray path. Pure computation on a `LensSystem`; lengths in mm.
+//! ray path. Pure computation on a `LensSystem`; lengths in mm. The shapes (profiles, rims, the
+//! stop's jaws, the sensor, ray fans) come from [`crate::lens_drawing`], at the terminal's
+//! coarser resolution.
 
 use flarebench_sdk::ghost::{GhostPath, enumerate_ghosts};
 use flarebench_sdk::paraxial::{ParaxialData, analyse};
-use flarebench_sdk::trace::{Ray, Sequence};
+use flarebench_sdk::trace::Sequence;
 use flarebench_sdk::{LensSystem, SurfaceKind};
+
+use crate::lens_drawing::{
+    RayPath, SensorMark, StopMark, profile_uniform, pupil_fan, rim, standard_fields,
+};
 
 /// A polyline in the meridional plane: points (z, y) in mm.
 pub type Polyline = Vec<(f64, f64)>;
 
 /// Rays per fan (per field).
 pub const FAN_RAYS: usize = 5;
+
+/// Intervals each surface profile is sampled at (the terminal's resolution needs few).
+const PROFILE_INTERVALS: usize = 24;
 
 /// Everything the analysis panel and the side view draw.
 #[derive(Clone, Debug)]
@@ -58,17 +67,18 @@ impl Analysis {
         let sensor = system.sensor_index();
         for (i, s) in system.surfaces.iter().enumerate() {
             match s.kind {
-                SurfaceKind::Refracting => surfaces.push(profile(system, i, z[i])),
+                SurfaceKind::Refracting => {
+                    surfaces.push(polyline(&profile_uniform(s, z[i], PROFILE_INTERVALS)));
+                }
                 SurfaceKind::ApertureStop => {
-                    let open = flarebench_sdk::paraxial::stop_opening(system);
-                    let outer = s.semi_diameter.max(open) * 1.2;
-                    surfaces.push(vec![(z[i], open), (z[i], outer)]);
-                    surfaces.push(vec![(z[i], -open), (z[i], -outer)]);
+                    for jaw in StopMark::new(system, i).jaws() {
+                        surfaces.push(polyline(&jaw));
+                    }
                 }
                 SurfaceKind::Sensor => {
-                    let h = 0.5 * (system.film_width_mm.hypot(system.film_height_mm));
-                    surfaces.push(vec![(z[i], -h), (z[i], h)]);
-                    half_height = half_height.max(h * 1.1);
+                    let mark = SensorMark::of(system);
+                    surfaces.push(polyline(&mark.line()));
+                    half_height = half_height.max(mark.half_height * 1.1);
                 }
             }
             if i + 1 < sensor
@@ -76,10 +86,10 @@ impl Analysis {
                 && s.kind == SurfaceKind::Refracting
                 && system.surfaces[i + 1].kind == SurfaceKind::Refracting
             {
-                let a = rim(system, i, z[i]);
-                let b = rim(system, i + 1, z[i + 1]);
-                edges.push(vec![(a.0, a.1), (b.0, b.1)]);
-                edges.push(vec![(a.0, -a.1), (b.0, -b.1)]);
+                let [za, ya] = rim(s, z[i]);
+                let [zb, yb] = rim(&system.surfaces[i + 1], z[i + 1]);
+                edges.push(vec![(za, ya), (zb, yb)]);
+                edges.push(vec![(za, -ya), (zb, -yb)]);
             }
         }
 
@@ -88,8 +98,7 @@ impl Analysis {
         let mut field_deg = 0.0;
         if let Ok(p) = &paraxial {
             let seq = Sequence::forward(system, lambda);
-            let half_diag = 0.5 * system.film_width_mm.hypot(system.film_height_mm);
-            field_deg = 0.7 * (half_diag / p.efl_mm.abs()).atan().to_degrees();
+            field_deg = standard_fields(system).map_or(0.0, |f| f[1]);
             let r_ep = 0.5 * p.entrance_pupil_diameter_mm;
             axial_rays = fan(&seq, 0.0, p.entrance_pupil_z_mm, r_ep, lead);
             field_rays = fan(&seq, field_deg, p.entrance_pupil_z_mm, r_ep, lead);
@@ -123,46 +132,17 @@ pub fn ghost_rays(system: &LensSystem, ghost: GhostPath, analysis: &Analysis) ->
     fan(&seq, 0.0, p.entrance_pupil_z_mm, r, lead)
 }
 
-/// The sag curve of surface `i` at vertex `z0`, sampled over ± its semi-diameter.
-fn profile(system: &LensSystem, i: usize, z0: f64) -> Polyline {
-    let s = &system.surfaces[i];
-    const N: usize = 24;
-    (0..=N)
-        .filter_map(|k| {
-            let y = s.semi_diameter * (2.0 * k as f64 / N as f64 - 1.0);
-            s.sag(y.abs()).map(|dz| (z0 + dz, y))
-        })
-        .collect()
-}
-
-/// The rim point (z, y > 0) of surface `i`.
-fn rim(system: &LensSystem, i: usize, z0: f64) -> (f64, f64) {
-    let s = &system.surfaces[i];
-    (z0 + s.sag(s.semi_diameter).unwrap_or(0.0), s.semi_diameter)
+/// A point list of the lens drawing as the side view's polyline.
+fn polyline(points: &[[f64; 2]]) -> Polyline {
+    points.iter().map(|p| (p[0], p[1])).collect()
 }
 
 /// `FAN_RAYS` collimated rays at `field_deg` aimed across the entrance pupil (at `ep_z`, radius
-/// `r_ep`), each drawn from `lead` mm in front of the first vertex.
+/// `r_ep`), each drawn from `lead` mm in front of the first vertex to its last completed
+/// interaction (the sensor, or the surface where it is blocked).
 fn fan(seq: &Sequence<f64>, field_deg: f64, ep_z: f64, r_ep: f64, lead: f64) -> Vec<Polyline> {
-    let tan = field_deg.to_radians().tan();
-    let mut hits = Vec::new();
-    (0..FAN_RAYS)
-        .map(|k| {
-            let t = 0.95 * (2.0 * k as f64 / (FAN_RAYS - 1) as f64 - 1.0);
-            // Height at z = 0 of the ray that crosses the pupil plane at t·r_ep.
-            let h = t * r_ep - tan * ep_z;
-            let ray = Ray::collimated(field_deg.to_radians(), 0.0, h);
-            hits.clear();
-            seq.trace_with_hits(&ray, &mut hits);
-            let mut line = vec![(-lead, h - tan * lead)];
-            for hit in &hits {
-                line.push((hit.position.z, hit.position.y));
-                // Blocked here: outside this surface's clear semi-diameter.
-                if hit.relative_radius > 1.0 {
-                    break;
-                }
-            }
-            line
-        })
+    pupil_fan(seq, field_deg, ep_z, r_ep, lead, FAN_RAYS)
+        .iter()
+        .map(|r: &RayPath| polyline(r.completed_points()))
         .collect()
 }
