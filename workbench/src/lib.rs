@@ -6,12 +6,14 @@ pub mod aperture_file;
 pub mod backend;
 pub mod cli;
 pub mod compose;
+pub mod document;
 #[cfg(feature = "tui")]
 pub mod edit;
 pub mod input_image;
 pub mod label;
 pub mod lens_drawing;
 pub mod lens_library;
+pub mod link;
 pub mod output;
 pub mod plugin_dirs;
 pub mod precomputed;
@@ -19,3 +21,5 @@ pub mod reference_file;
 pub mod report;
 pub mod sources;
 pub mod table;
+#[cfg(feature = "window")]
+pub mod viewer;

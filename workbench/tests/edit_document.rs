@@ -2,7 +2,7 @@
 //! Property tests: apply then undo is the identity, undo then redo is the identity, a refused
 //! edit changes nothing, and the document always holds a valid system.
 
-use flarebench::edit::document::{Document, Edit, EditError, Header};
+use flarebench::document::{Document, Edit, EditError, Header};
 use flarebench_sdk::io::read_lens;
 use flarebench_sdk::system::curvature_from_radius;
 use flarebench_sdk::{LensSystem, Medium, Surface};

@@ -163,3 +163,144 @@ fn without_a_terminal_or_a_lens_the_errors_are_clear() {
         "names the bundled lenses: {err}"
     );
 }
+
+/// The share of pixels in `rect` (x, y, w, h) that differ between two screenshots.
+fn changed(a: &image::RgbImage, b: &image::RgbImage, rect: [u32; 4]) -> f64 {
+    let [x0, y0, w, h] = rect;
+    let mut n = 0;
+    for y in y0..y0 + h {
+        for x in x0..x0 + w {
+            if a.get_pixel(x, y) != b.get_pixel(x, y) {
+                n += 1;
+            }
+        }
+    }
+    n as f64 / (w * h) as f64
+}
+
+#[test]
+#[cfg(feature = "window")]
+fn edit_with_a_window_shows_each_edit_in_the_window() {
+    use common::x11::{Xvfb, x_tools};
+    if !tmux_available() || !x_tools() {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "tmux or X tools missing under CI"
+        );
+        eprintln!("skipped: tmux or the X tools are not installed");
+        return;
+    }
+    let tmp = common::temp_dir("edit-window");
+    let path = tmp.path().join("heliar-tronnier.xml");
+    std::fs::copy(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../lenses/heliar-tronnier.xml"),
+        &path,
+    )
+    .unwrap();
+    let x = Xvfb::start();
+    let tmux = Tmux {
+        socket: format!("flarebench-e2e-window-{}", std::process::id()),
+    };
+    let command = format!(
+        "env DISPLAY={} '{}' edit --window '{}'",
+        x.display,
+        env!("CARGO_BIN_EXE_flarebench"),
+        path.display()
+    );
+    let out = tmux.run(&[
+        "new-session",
+        "-d",
+        "-s",
+        "e2e",
+        "-x",
+        "120",
+        "-y",
+        "40",
+        &command,
+    ]);
+    assert!(out.status.success(), "tmux new-session: {out:?}");
+    tmux.wait_for("flarebench edit — heliar-tronnier.xml");
+
+    // The window (at the screen's top-left corner: Xvfb has no window manager) settles: two
+    // screenshots a second apart alike, the flare drawn.
+    let lens_area = [20, 60, 500, 500];
+    let flare_area = [700, 100, 500, 400];
+    let settle = |what: &str| -> image::RgbImage {
+        let start = Instant::now();
+        let mut last = x.screenshot();
+        loop {
+            std::thread::sleep(Duration::from_millis(1000));
+            let now = x.screenshot();
+            if changed(&last, &now, [0, 0, 1280, 720]) == 0.0
+                && changed(&now, &image::RgbImage::new(1280, 720), flare_area) > 0.01
+            {
+                return now;
+            }
+            assert!(
+                start.elapsed() < Duration::from_secs(240),
+                "the window never settled {what}; the editor:\n{}",
+                tmux.pane()
+            );
+            last = now;
+        }
+    };
+    let before = settle("after opening");
+
+    // Surface 0's radius (30.81 mm) made 24 mm in the terminal: the lens and the flare change.
+    tmux.keys(&["Enter", "C-u", "2", "4", "Enter"]);
+    tmux.wait_for("[modified]");
+    let after = settle("after the edit");
+    assert!(
+        changed(&before, &after, lens_area) > 0.001,
+        "the lens view did not change"
+    );
+    assert!(
+        changed(&before, &after, flare_area) > 0.001,
+        "the flare did not change"
+    );
+
+    // Quitting the editor closes the window and ends the process.
+    tmux.keys(&[":", "q", "!", "Enter"]);
+    let start = Instant::now();
+    while tmux.session_alive() {
+        assert!(
+            start.elapsed() < Duration::from_secs(20),
+            "the editor did not quit: {}",
+            tmux.pane()
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+}
+
+#[test]
+#[cfg(feature = "window")]
+fn edit_with_a_window_but_no_display_runs_the_editor_with_a_note() {
+    if !tmux_available() {
+        assert!(std::env::var_os("CI").is_none(), "tmux missing under CI");
+        return;
+    }
+    let tmux = Tmux {
+        socket: format!("flarebench-e2e-nodisplay-{}", std::process::id()),
+    };
+    let command = format!(
+        "env -u DISPLAY -u WAYLAND_DISPLAY '{}' edit --window heliar-tronnier",
+        env!("CARGO_BIN_EXE_flarebench")
+    );
+    let out = tmux.run(&[
+        "new-session",
+        "-d",
+        "-s",
+        "e2e",
+        "-x",
+        "160",
+        "-y",
+        "40",
+        &command,
+    ]);
+    assert!(out.status.success(), "tmux new-session: {out:?}");
+    tmux.wait_for("no window: cannot open a window");
+    // The editor works: an edit goes in.
+    tmux.keys(&["j", "l", "Enter", "C-u", "7", ".", "5", "Enter"]);
+    tmux.wait_for("[modified]");
+    tmux.keys(&[":", "q", "!", "Enter"]);
+}

@@ -9,8 +9,10 @@ mod edit;
 mod info;
 mod plugins;
 mod precompute;
-mod render;
+pub(crate) mod render;
 mod trace;
+#[cfg(feature = "window")]
+mod view;
 
 use std::process::ExitCode;
 
@@ -46,6 +48,10 @@ pub enum Command {
     /// Edit a lens prescription in the terminal (spreadsheet, undo, live analysis).
     #[cfg(feature = "tui")]
     Edit(edit::EditArgs),
+    /// Open the viewer window on a lens: its section with ray fans and ghost paths beside a
+    /// live flare preview (docs/window.md).
+    #[cfg(feature = "window")]
+    View(view::ViewArgs),
     /// Render one scene with several algorithm plugins: side-by-side and difference images,
     /// median time, error against the reference, items drawn, peak memory.
     Compare(compare::CompareArgs),
@@ -68,6 +74,8 @@ pub fn main() -> ExitCode {
         Command::Bench(a) => bench::run(a, cli.quiet),
         #[cfg(feature = "tui")]
         Command::Edit(a) => edit::run(a, cli.quiet),
+        #[cfg(feature = "window")]
+        Command::View(a) => view::run(a, cli.quiet),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -496,10 +496,10 @@ pub(crate) fn auto_exposure(img: &flarebench_sdk::image::HdrImage) -> f32 {
 /// Stops the automatic exposure leaves above the brightest 0.1% of the ghosts' pixels: they
 /// land at a quarter of white, so ghosts that overlap stay translucent and keep their colour
 /// through the tone curve (at 0 the Heliar's ghosts for a light at 8°, 60° wash the frame out).
-const GHOST_HEADROOM_EV: f32 = -2.0;
+pub(crate) const GHOST_HEADROOM_EV: f32 = -2.0;
 
 /// [`auto_exposure`], or `None` when no pixel is lit.
-fn lit_exposure(img: &flarebench_sdk::image::HdrImage) -> Option<f32> {
+pub(crate) fn lit_exposure(img: &flarebench_sdk::image::HdrImage) -> Option<f32> {
     let mut lum: Vec<f32> = img
         .pixels
         .iter()

@@ -77,6 +77,14 @@ pub enum Action {
     /// Quit (asks when there are unsaved changes); `ForceQuit` does not ask.
     Quit,
     ForceQuit,
+    /// Open the viewer window beside the editor (`W`, `:window`).
+    Window,
+    /// From the window: a surface clicked in the lens view.
+    SelectRow(usize),
+    /// From the window: a ghost clicked in the flare view.
+    SelectGhost(flarebench_sdk::ghost::GhostPath),
+    /// From the window: a note for the status line (e.g. why it could not open).
+    Note(String),
     /// An answer to a one-key prompt (`y`, `n`, `r`, `d`, `s`, …).
     Answer(char),
     /// Results of effects.
@@ -119,6 +127,8 @@ pub enum Effect {
     RemoveRecovery(PathBuf),
     /// Read a lens (path or bundled name).
     Open(String),
+    /// Open the viewer window (the runner knows whether there can be one).
+    OpenWindow,
     /// Leave the editor.
     Quit,
 }

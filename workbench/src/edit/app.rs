@@ -126,6 +126,20 @@ impl App {
         *self.doc.system() != self.saved
     }
 
+    /// The selected surface row, if a table cell is selected.
+    pub fn selected_row(&self) -> Option<usize> {
+        match self.focus {
+            Focus::Cell { row, .. } => Some(row),
+            Focus::Header(_) => None,
+        }
+    }
+
+    /// The selected ghost's path.
+    pub fn selected_ghost(&self) -> Option<flarebench_sdk::ghost::GhostPath> {
+        self.ghost
+            .and_then(|g| self.analysis.ghosts.get(g).copied())
+    }
+
     /// The key mode for the keymap.
     pub fn key_mode(&self) -> KeyMode {
         match self.mode {
@@ -159,7 +173,12 @@ impl App {
     pub fn update(&mut self, action: Action) -> Vec<Effect> {
         if !matches!(
             action,
-            Action::Resize { .. } | Action::Saved(_) | Action::Opened(_) | Action::Failed(_)
+            Action::Resize { .. }
+                | Action::Saved(_)
+                | Action::Opened(_)
+                | Action::Failed(_)
+                | Action::SelectRow(_)
+                | Action::SelectGhost(_)
         ) {
             self.message = None;
         }
@@ -175,6 +194,25 @@ impl App {
                 Err(e) => self.error(e),
             },
             Action::Failed(e) => self.error(e),
+            Action::Note(n) => self.info(n),
+            Action::SelectRow(row) => {
+                let n = self.doc.system().surfaces.len();
+                if row < n {
+                    let col = match self.focus {
+                        Focus::Cell { col, .. } => col,
+                        Focus::Header(_) => 1,
+                    };
+                    self.focus = Focus::Cell { row, col };
+                    self.ensure_visible();
+                }
+            }
+            Action::SelectGhost(g) => {
+                self.ghost = self.analysis.ghosts.iter().position(|x| *x == g);
+                self.trace_ghost();
+                if let Some(i) = self.ghost {
+                    self.info(format!("ghost {} selected in the window", i + 1));
+                }
+            }
             a => match self.mode.clone() {
                 Mode::Normal => self.normal(a, &mut fx),
                 Mode::Cell(ed) => self.cell(ed, a, &mut fx),
@@ -282,6 +320,7 @@ impl App {
             Action::SaveAs => self.open_line(LinePurpose::SaveAs),
             Action::Open => self.open_line(LinePurpose::Open),
             Action::Command => self.open_line(LinePurpose::Command),
+            Action::Window => fx.push(Effect::OpenWindow),
             Action::Quit => {
                 if self.dirty() {
                     self.mode = Mode::Prompt(Prompt::QuitUnsaved);
@@ -452,9 +491,10 @@ impl App {
                 None => self.error(format!(":{cmd} needs a lens path or name")),
             },
             "help" => self.mode = Mode::Help,
+            "window" => fx.push(Effect::OpenWindow),
             "" => {}
             _ => self.error(format!(
-                "unknown command :{cmd} (w, wq, q, q!, e PATH, help)"
+                "unknown command :{cmd} (w, wq, q, q!, e PATH, window, help)"
             )),
         }
     }
@@ -541,7 +581,8 @@ impl App {
             (Prompt::Recover(sys), 'r') => {
                 self.mode = Mode::Normal;
                 match Document::new(*sys) {
-                    Ok(doc) => {
+                    Ok(mut doc) => {
+                        doc.take_subscribers(&mut self.doc);
                         self.doc = doc;
                         self.after_change(None, fx);
                         self.info("recovered the unsaved edits (not saved yet)".into());
@@ -614,6 +655,7 @@ impl App {
                 if app.message.is_none() {
                     app.info(format!("opened {label}"));
                 }
+                app.doc.take_subscribers(&mut self.doc);
                 *self = app;
             }
             Err(e) => self.error(format!("cannot edit {label}: {e}")),

@@ -68,7 +68,7 @@ pub fn write_recovery(path: &Path, system: &LensSystem) -> std::io::Result<()> {
 }
 
 /// Runs `effect`; returns the action reporting its result (`None` for effects nobody waits
-/// for, and for `Quit`, which the runner handles).
+/// for, and for `Quit` and `OpenWindow`, which the runner handles).
 pub fn perform(effect: &Effect) -> Option<Action> {
     match effect {
         Effect::Save {
@@ -92,6 +92,6 @@ pub fn perform(effect: &Effect) -> Option<Action> {
             None
         }
         Effect::Open(spec) => Some(Action::Opened(open(spec, false).map(Box::new))),
-        Effect::Quit => None,
+        Effect::Quit | Effect::OpenWindow => None,
     }
 }

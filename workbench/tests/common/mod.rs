@@ -4,6 +4,8 @@
 
 use std::process::{Command, Output};
 
+pub mod x11;
+
 use serde_json::Value;
 
 /// Runs `flarebench` with `args`.

@@ -253,6 +253,14 @@ impl Document {
         Ok(edit)
     }
 
+    /// Takes over `previous`'s subscribers (a new lens opened or recovered in the same editor):
+    /// the revision goes on from `previous`'s and every subscriber is sent this document.
+    pub fn take_subscribers(&mut self, previous: &mut Document) {
+        self.subscribers.append(&mut previous.subscribers);
+        self.revision = self.revision.max(previous.revision);
+        self.changed();
+    }
+
     /// Checks `edit` without applying it: `Ok` when it fits and leaves a valid system.
     pub fn check(&self, edit: &Edit) -> Result<(), EditError> {
         let mut next = self.system.clone();

@@ -1,0 +1,119 @@
+//! `flarebench view`: the viewer window on a lens (lens section, ray fans, live flare), or the
+//! same views drawn offscreen into a PNG (`--screenshot`).
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+use anyhow::Context;
+use clap::Args;
+use ghost_raytrace::scene::{LightSpec, Quality};
+
+use crate::backend::BackendChoice;
+use crate::cli::render::{StarburstMode, parse_size};
+use crate::lens_library;
+use crate::viewer::offscreen::Offscreen;
+use crate::viewer::window::{self, OnClose, WindowApp};
+use crate::viewer::{Viewer, ViewerOptions};
+
+#[derive(Debug, Args)]
+pub struct ViewArgs {
+    /// Lens file or the name of a bundled lens.
+    pub lens: String,
+    /// A light at infinity, THETA,PHI[,INTENSITY[,COLOUR]] as for `render` (repeat for
+    /// several; the first one follows a drag in the flare view). Default 8,30.
+    #[arg(long = "light", value_parser = LightSpec::parse)]
+    pub lights: Vec<LightSpec>,
+    /// The flare preview's render size, WxH.
+    #[arg(long, value_parser = parse_size, default_value = "960x540")]
+    pub size: (usize, usize),
+    /// The preset the preview settles on (a fast frame always comes first).
+    #[arg(long, default_value_t = Quality::Default)]
+    pub quality: Quality,
+    /// Diffraction starburst: on, off or only.
+    #[arg(long, value_enum, default_value_t = StarburstMode::On)]
+    pub starburst: StarburstMode,
+    /// Iris blade count (0: a circular stop).
+    #[arg(long, default_value_t = 0)]
+    pub iris_blades: u32,
+    /// Where the flare is drawn: auto (a hardware GPU if there is one, else the CPU), cpu or gpu.
+    #[arg(long, value_enum, default_value_t = BackendChoice::Auto)]
+    pub backend: BackendChoice,
+    /// Draw the window's views offscreen into this PNG once the flare has settled, instead of
+    /// opening a window (needs no display).
+    #[arg(long, value_name = "PNG")]
+    pub screenshot: Option<PathBuf>,
+    /// Print a line to standard output for every frame shown, light move, selection and
+    /// layout change (for scripts and tests that drive the window).
+    #[arg(long)]
+    pub log: bool,
+    /// The window's size (logical pixels), WxH; with --screenshot, the offscreen image's.
+    #[arg(long, value_parser = parse_size, default_value = "1500x820")]
+    pub window_size: (usize, usize),
+}
+
+impl ViewArgs {
+    fn options(&self) -> anyhow::Result<ViewerOptions> {
+        let mut o = ViewerOptions {
+            backend: self.backend,
+            size: self.size,
+            quality: self.quality,
+            starburst: self.starburst,
+            blades: self.iris_blades,
+            ..ViewerOptions::default()
+        };
+        if self.iris_blades > 0 {
+            flarebench_sdk::aperture::Aperture::Iris {
+                blades: self.iris_blades,
+                rotation_rad: 0.0,
+                roundness: 0.0,
+            }
+            .validate()
+            .context("--iris-blades")?;
+        }
+        if !self.lights.is_empty() {
+            o.lights = self.lights.clone();
+        }
+        Ok(o)
+    }
+}
+
+pub fn run(args: &ViewArgs, quiet: bool) -> anyhow::Result<()> {
+    let loaded = lens_library::load(&args.lens, quiet)?;
+    let options = args.options()?;
+    if let Some(path) = &args.screenshot {
+        let mut viewer = Viewer::new(loaded.system, options, Box::new(|| {}));
+        let (w, h) = args.window_size;
+        let mut target = Offscreen::new(w as u32, h as u32)?;
+        let settled = target.settle(&mut viewer, Duration::from_secs(600));
+        // Written also when the render failed: the status line in it says why.
+        target
+            .read()?
+            .save(path)
+            .with_context(|| format!("could not write `{}`", path.display()))?;
+        if !quiet {
+            eprintln!("wrote {}", path.display());
+        }
+        if let Some(why) = viewer.render_failure() {
+            anyhow::bail!("{why}");
+        }
+        anyhow::ensure!(settled, "the flare did not settle within 10 minutes");
+        return Ok(());
+    }
+    let event_loop = window::event_loop()?;
+    let mut viewer = Viewer::new(
+        loaded.system,
+        options,
+        window::waker(event_loop.create_proxy()),
+    );
+    if args.log {
+        viewer = viewer.with_log(Box::new(|line| {
+            use std::io::Write;
+            let mut out = std::io::stdout().lock();
+            let _ = writeln!(out, "{line}");
+            let _ = out.flush();
+        }));
+    }
+    let mut app = WindowApp::new(&event_loop, viewer, true, OnClose::Exit)
+        .with_size(args.window_size.0 as f64, args.window_size.1 as f64);
+    window::run(event_loop, &mut app)
+}

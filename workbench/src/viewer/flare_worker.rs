@@ -1,0 +1,485 @@
+//! The flare preview's render worker: one thread that renders the newest scene it was given,
+//! progressively (a fast frame at once, then the default preset while the scene holds still,
+//! then on request the error against the dense reference). A job that arrives while one renders
+//! replaces the waiting one (the newest edit wins; a stale job is dropped, never queued), and
+//! the frames of a superseded job are not sent. A panic in a render is caught and reported;
+//! the worker keeps serving.
+
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::sync::mpsc::{Receiver, Sender, channel};
+use std::sync::{Arc, Condvar, Mutex};
+use std::thread::JoinHandle;
+use std::time::Instant;
+
+use flarebench_sdk::LensSystem;
+use flarebench_sdk::aperture::Aperture;
+use flarebench_sdk::frame::Frame;
+use flarebench_sdk::ghost::{GhostPath, ReflectionOrder};
+use flarebench_sdk::image::HdrImage;
+use flarebench_sdk::starburst::{StarburstCache, StarburstSettings};
+use ghost_raytrace::ghosts::RenderOptions;
+use ghost_raytrace::plan::{self, PlanOptions};
+use ghost_raytrace::scene::{LightSpec, Quality};
+use rayon::prelude::*;
+
+use crate::backend::{BackendChoice, BackendReport, GhostBackend};
+use crate::cli::render::{GHOST_HEADROOM_EV, StarburstMode, frame_for, lit_exposure};
+use crate::compose::StarburstSetup;
+use crate::output::{ToneMap, ToneOperator};
+use crate::report::ErrorReport;
+
+/// What the flare view shows: everything a render depends on besides the lens.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FlareScene {
+    pub lights: Vec<LightSpec>,
+    /// Image size in pixels.
+    pub width: usize,
+    pub height: usize,
+    pub aperture: Aperture,
+    pub starburst: StarburstMode,
+    /// The preset rendered once the scene holds still (the fast preset comes first).
+    pub quality: Quality,
+    /// Draw this ghost alone.
+    pub solo: Option<GhostPath>,
+    /// Stops added to the automatic exposure.
+    pub exposure_offset_ev: f32,
+}
+
+/// One render request: a lens and a scene, numbered so results can be matched to requests.
+#[derive(Clone, Debug)]
+pub struct FlareJob {
+    pub id: u64,
+    pub system: Arc<LensSystem>,
+    pub scene: FlareScene,
+    /// Also render the dense reference and report the error against it (slow).
+    pub reference: bool,
+}
+
+/// The stages of a job, in the order they are rendered.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Stage {
+    /// The fast preset: the first frame after a change.
+    Fast,
+    /// The scene's own preset, once nothing newer is waiting.
+    Settled,
+    /// The settled frame with its error against the dense reference.
+    Reference,
+}
+
+/// Where a drawn ghost lands, to find the ghost under the mouse.
+#[derive(Clone, Debug)]
+pub struct GhostFootprint {
+    pub path: GhostPath,
+    /// Index of the light it belongs to.
+    pub light: usize,
+    /// Its landing rectangle in its light's meridional frame (mm) and that frame's azimuth.
+    pub rect: [f64; 4],
+    pub phi: f64,
+    pub energy_share: f64,
+}
+
+/// Figures of one frame.
+#[derive(Clone, Debug, Default)]
+pub struct FrameStats {
+    pub ghosts_drawn: usize,
+    pub ghosts_dropped: usize,
+    /// The share of the ghost energy left out by planning, over all lights.
+    pub dropped_energy_fraction: f64,
+    pub triangles: usize,
+    pub plan_ms: f64,
+    pub ghosts_ms: f64,
+    pub starburst_ms: f64,
+    pub tone_ms: f64,
+    pub total_ms: f64,
+    /// Time to render the dense reference (the reference stage only).
+    pub reference_ms: Option<f64>,
+    /// The automatic exposure of the frame (stops, before the scene's offset).
+    pub auto_exposure_ev: f32,
+}
+
+/// A rendered frame.
+#[derive(Clone, Debug)]
+pub struct FlareFrame {
+    pub id: u64,
+    pub stage: Stage,
+    pub quality: Quality,
+    /// The linear image (ghosts and starbursts).
+    pub hdr: Arc<HdrImage>,
+    /// Tone mapped, 8-bit sRGB with opaque alpha, rows top to bottom.
+    pub rgba: Vec<u8>,
+    pub stats: FrameStats,
+    pub ghosts: Vec<GhostFootprint>,
+    pub backend: BackendReport,
+    pub error: Option<ErrorReport>,
+}
+
+/// What the worker sends back.
+#[derive(Debug)]
+pub enum WorkerEvent {
+    Frame(Box<FlareFrame>),
+    /// The job could not be rendered (an error, not a bug).
+    Failed {
+        id: u64,
+        message: String,
+    },
+    /// A render panicked: a bug, shown in the status line; the worker goes on.
+    Panicked {
+        id: u64,
+        message: String,
+    },
+}
+
+type Waker = Box<dyn Fn() + Send + Sync>;
+
+#[derive(Default)]
+struct Pending {
+    job: Option<FlareJob>,
+    quit: bool,
+}
+
+struct Shared {
+    pending: Mutex<Pending>,
+    wake: Condvar,
+}
+
+impl Shared {
+    /// True when a newer job waits (the current one is stale).
+    fn superseded(&self) -> bool {
+        let p = self.pending.lock().unwrap_or_else(|e| e.into_inner());
+        p.job.is_some() || p.quit
+    }
+}
+
+/// The worker thread and its channels.
+pub struct FlareWorker {
+    shared: Arc<Shared>,
+    events: Receiver<WorkerEvent>,
+    thread: Option<JoinHandle<()>>,
+}
+
+impl std::fmt::Debug for FlareWorker {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("FlareWorker").finish_non_exhaustive()
+    }
+}
+
+impl FlareWorker {
+    /// Starts the worker with `backend` (opened on the worker thread: a failure to open the
+    /// GPU falls back to the CPU and says so in every frame's report). `waker` is called after
+    /// every event sent (e.g. to wake the window's event loop).
+    pub fn start(backend: BackendChoice, waker: Waker) -> FlareWorker {
+        let shared = Arc::new(Shared {
+            pending: Mutex::new(Pending::default()),
+            wake: Condvar::new(),
+        });
+        let (tx, events) = channel();
+        let s = Arc::clone(&shared);
+        let thread = std::thread::Builder::new()
+            .name("flare-render".into())
+            .spawn(move || serve(&s, backend, &tx, &waker))
+            .expect("spawning the render thread");
+        FlareWorker {
+            shared,
+            events,
+            thread: Some(thread),
+        }
+    }
+
+    /// Asks for `job`, replacing any job still waiting.
+    pub fn submit(&self, job: FlareJob) {
+        let mut p = self
+            .shared
+            .pending
+            .lock()
+            .unwrap_or_else(|e| e.into_inner());
+        p.job = Some(job);
+        self.shared.wake.notify_one();
+    }
+
+    /// The events that have arrived, oldest first, without waiting.
+    pub fn poll(&self) -> Vec<WorkerEvent> {
+        self.events.try_iter().collect()
+    }
+
+    /// Waits for the next event (tests and headless use).
+    pub fn wait(&self, timeout: std::time::Duration) -> Option<WorkerEvent> {
+        self.events.recv_timeout(timeout).ok()
+    }
+}
+
+impl Drop for FlareWorker {
+    fn drop(&mut self) {
+        {
+            let mut p = self
+                .shared
+                .pending
+                .lock()
+                .unwrap_or_else(|e| e.into_inner());
+            p.quit = true;
+            p.job = None;
+            self.shared.wake.notify_one();
+        }
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+fn serve(shared: &Shared, choice: BackendChoice, tx: &Sender<WorkerEvent>, waker: &Waker) {
+    let mut renderer: Option<Renderer> = None;
+    loop {
+        let job = {
+            let mut p = shared.pending.lock().unwrap_or_else(|e| e.into_inner());
+            loop {
+                if p.quit {
+                    return;
+                }
+                if let Some(job) = p.job.take() {
+                    break job;
+                }
+                p = shared.wake.wait(p).unwrap_or_else(|e| e.into_inner());
+            }
+        };
+        let mut stages = vec![Stage::Fast];
+        if job.scene.quality != Quality::Fast || job.reference {
+            stages.push(Stage::Settled);
+        }
+        if job.reference {
+            stages.push(Stage::Reference);
+        }
+        let mut last: Option<FlareFrame> = None;
+        for stage in stages {
+            if shared.superseded() {
+                break;
+            }
+            let r = renderer.get_or_insert_with(|| Renderer::open(choice));
+            let outcome = catch_unwind(AssertUnwindSafe(|| match (stage, &last) {
+                (Stage::Reference, Some(settled)) => Renderer::with_error(&job, settled),
+                _ => r.render(&job, stage),
+            }));
+            let event = match outcome {
+                Ok(Ok(frame)) => {
+                    last = Some(frame.clone());
+                    // A job replaced while it rendered: its frame is stale.
+                    if shared.superseded() {
+                        break;
+                    }
+                    WorkerEvent::Frame(Box::new(frame))
+                }
+                Ok(Err(e)) => WorkerEvent::Failed {
+                    id: job.id,
+                    message: format!("{e:#}"),
+                },
+                Err(panic) => {
+                    // The backend's state may be broken: open a new one for the next job.
+                    renderer = None;
+                    WorkerEvent::Panicked {
+                        id: job.id,
+                        message: panic_message(panic.as_ref()),
+                    }
+                }
+            };
+            let stop = !matches!(event, WorkerEvent::Frame(_));
+            if tx.send(event).is_err() {
+                return;
+            }
+            waker();
+            if stop {
+                break;
+            }
+        }
+    }
+}
+
+/// The text of a panic's payload.
+pub fn panic_message(p: &(dyn std::any::Any + Send)) -> String {
+    if let Some(s) = p.downcast_ref::<&str>() {
+        s.to_string()
+    } else if let Some(s) = p.downcast_ref::<String>() {
+        s.clone()
+    } else {
+        "a render panicked".into()
+    }
+}
+
+/// The backend and the starburst cache, kept from frame to frame.
+struct Renderer {
+    backend: GhostBackend,
+    starbursts: StarburstCache,
+    /// Why the backend asked for could not be opened (the CPU is used instead).
+    fallback: Option<String>,
+}
+
+impl Renderer {
+    fn open(choice: BackendChoice) -> Renderer {
+        match GhostBackend::open(choice) {
+            Ok(backend) => Renderer {
+                backend,
+                starbursts: StarburstCache::new(),
+                fallback: None,
+            },
+            Err(e) => Renderer {
+                backend: GhostBackend::open(BackendChoice::Cpu).expect("the CPU backend opens"),
+                starbursts: StarburstCache::new(),
+                fallback: Some(format!("{e:#}; drawing on the CPU")),
+            },
+        }
+    }
+
+    /// `settled` with its error against the dense reference of its scene.
+    fn with_error(job: &FlareJob, settled: &FlareFrame) -> anyhow::Result<FlareFrame> {
+        let t = Instant::now();
+        let scene = &job.scene;
+        let frame = frame_for(&job.system, (scene.width, scene.height));
+        let (reference, _) = crate::reference_file::reference_for(
+            &job.system,
+            &scene.aperture,
+            frame,
+            &scene.lights,
+            None,
+            ReflectionOrder::Two,
+        )?;
+        let c = settled.hdr.compare(&reference)?;
+        let mut f = settled.clone();
+        f.stage = Stage::Reference;
+        f.stats.reference_ms = Some(ms(t));
+        f.error = Some(ErrorReport {
+            relative_rmse: c.relative_rmse,
+            relative_l1: c.relative_l1,
+            energy_error: c.energy_error,
+        });
+        Ok(f)
+    }
+
+    fn render(&mut self, job: &FlareJob, stage: Stage) -> anyhow::Result<FlareFrame> {
+        // Fault injection for the tests of what a render bug does to the window and editor.
+        if std::env::var_os("FLAREBENCH_FAULT").is_some_and(|v| v == "render-panic") {
+            panic!("injected render panic (FLAREBENCH_FAULT=render-panic)");
+        }
+        let t0 = Instant::now();
+        let sys = job.system.as_ref();
+        let scene = &job.scene;
+        let quality = match stage {
+            Stage::Fast => Quality::Fast,
+            Stage::Settled | Stage::Reference => scene.quality,
+        };
+        let frame = frame_for(sys, (scene.width, scene.height));
+        let mut stats = FrameStats::default();
+
+        let t = Instant::now();
+        let preset = PlanOptions::for_quality(quality, None);
+        let mut plans = if scene.starburst == StarburstMode::Only {
+            Vec::new()
+        } else {
+            plan::plan(sys, &scene.lights, &frame, &preset)?
+        };
+        if let Some(solo) = &scene.solo {
+            for p in &mut plans {
+                p.ghosts.retain(|g| g.path == *solo);
+            }
+        }
+        stats.plan_ms = ms(t);
+
+        let t = Instant::now();
+        let (mut img, ghost_stats) = self.backend.render(
+            sys,
+            &scene.aperture,
+            frame,
+            &plans,
+            RenderOptions::default(),
+        )?;
+        stats.ghosts_ms = ms(t);
+        let (mut total, mut dropped) = (0.0, 0.0);
+        let mut ghosts = Vec::new();
+        for (l, (p, s)) in plans.iter().zip(&ghost_stats).enumerate() {
+            let (t, d) = p.energy();
+            total += t;
+            dropped += d;
+            stats.ghosts_drawn += p.ghosts.len();
+            stats.ghosts_dropped += p.dropped.len();
+            stats.triangles += s.iter().map(|g| g.triangles).sum::<usize>();
+            ghosts.extend(p.ghosts.iter().map(|g| {
+                let r = g.bounds.sensor;
+                GhostFootprint {
+                    path: g.path,
+                    light: l,
+                    rect: [r.x0, r.y0, r.x1, r.y1],
+                    phi: p.light.phi_deg.to_radians(),
+                    energy_share: g.energy_share,
+                }
+            }));
+        }
+        stats.dropped_energy_fraction = if total > 0.0 { dropped / total } else { 0.0 };
+        stats.auto_exposure_ev = lit_exposure(&img).map_or(0.0, |ev| ev + GHOST_HEADROOM_EV);
+
+        let t = Instant::now();
+        if scene.starburst != StarburstMode::Off {
+            let setup = StarburstSetup {
+                aperture: &scene.aperture,
+                dust: None,
+                settings: StarburstSettings::default(),
+            };
+            self.backend.add_starbursts(
+                &mut img,
+                sys,
+                &frame,
+                &scene.lights,
+                &setup,
+                &mut self.starbursts,
+            )?;
+            if plans.is_empty() {
+                stats.auto_exposure_ev = lit_exposure(&img).unwrap_or(0.0);
+            }
+        }
+        stats.starburst_ms = ms(t);
+
+        let t = Instant::now();
+        let rgba = tone_rgba(&img, stats.auto_exposure_ev + scene.exposure_offset_ev);
+        stats.tone_ms = ms(t);
+        stats.total_ms = ms(t0);
+        let mut backend = self.backend.report().clone();
+        if let Some(why) = &self.fallback {
+            backend.note = Some(why.clone());
+        }
+        Ok(FlareFrame {
+            id: job.id,
+            stage,
+            quality,
+            hdr: Arc::new(img),
+            rgba,
+            stats,
+            ghosts,
+            backend,
+            error: None,
+        })
+    }
+}
+
+fn ms(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
+}
+
+/// `img` tone mapped as the PNG writer maps it (ACES, sRGB) at `exposure_ev`, as RGBA8.
+pub fn tone_rgba(img: &HdrImage, exposure_ev: f32) -> Vec<u8> {
+    let tone = ToneMap {
+        exposure_ev,
+        operator: ToneOperator::Aces,
+    };
+    let mut out = vec![0u8; img.pixels.len() * 4];
+    out.par_chunks_mut(4 * 4096)
+        .zip(img.pixels.par_chunks(4096))
+        .for_each(|(o, px)| {
+            for (o, p) in o.chunks_exact_mut(4).zip(px) {
+                o[0] = tone.map_channel(p[0]);
+                o[1] = tone.map_channel(p[1]);
+                o[2] = tone.map_channel(p[2]);
+                o[3] = 255;
+            }
+        });
+    out
+}
+
+/// The frame of the flare view for `system` at `width × height` (the film's width across).
+pub fn view_frame(system: &LensSystem, width: usize, height: usize) -> Frame {
+    frame_for(system, (width, height))
+}

@@ -1,0 +1,25 @@
+//! The viewer window (`flarebench view`, `flarebench edit --window`): the lens's meridional
+//! section with ray fans and the selected ghost's path beside a live flare preview, with a
+//! status line. winit + wgpu, panels and painting by egui.
+//!
+//! - `app`: the viewer's state and its UI pass (`Viewer::frame`), the link with the editor
+//! - `lens_view`: the lens section painted from [`crate::lens_drawing`], pan, zoom, hover
+//! - `flare_view`: the flare image, light drag, exposure, ghost picking and labels
+//! - `flare_worker`: the render thread (newest job wins; fast, settled, reference stages)
+//! - `status`: the status line
+//! - `gfx`: egui's shapes drawn with wgpu into any texture view
+//! - `offscreen`: the viewer drawn into a texture and read back (tests, screenshots)
+//! - `window`: winit's event loop, the surface, input
+//!
+//! docs/window.md describes the views, the controls and the threads.
+
+pub mod app;
+pub mod flare_view;
+pub mod flare_worker;
+pub mod gfx;
+pub mod lens_view;
+pub mod offscreen;
+pub mod status;
+pub mod window;
+
+pub use app::{EditorLink, Viewer, ViewerOptions};

@@ -1,0 +1,100 @@
+//! The status line: frame time by stage, ghosts drawn and left out with the dropped energy
+//! share, backend and adapter, the error when known, and the last message (a failed or
+//! panicked render, a save).
+
+use egui::{Color32, RichText, Ui};
+
+use super::app::Viewer;
+use super::flare_worker::{FlareFrame, Stage};
+
+/// The controls, for the help line.
+pub fn help_line() -> &'static str {
+    "lens: drag pan · wheel zoom · F fit · W wavelengths | flare: drag light · wheel exposure · \
+     click ghost · N / Shift-N next/previous ghost · G ghost alone · S starburst on/off/only · \
+     Q quality · B blades · L labels · E error · P save PNG · X save EXR"
+}
+
+/// The frame's figures as one line of text.
+pub fn frame_line(f: &FlareFrame) -> String {
+    let s = &f.stats;
+    let stage = match f.stage {
+        Stage::Fast => "fast",
+        Stage::Settled => "settled",
+        Stage::Reference => "with error",
+    };
+    let mut line = format!(
+        "{stage} frame ({}) {:.0} ms: plan {:.1}, ghosts {:.1}, starburst {:.1}, tone {:.1} ms · \
+         {} ghosts drawn, {} left out ({:.2}% of the ghost energy) · {} triangles",
+        f.quality.name(),
+        s.total_ms,
+        s.plan_ms,
+        s.ghosts_ms,
+        s.starburst_ms,
+        s.tone_ms,
+        s.ghosts_drawn,
+        s.ghosts_dropped,
+        100.0 * s.dropped_energy_fraction,
+        s.triangles
+    );
+    if let Some(e) = &f.error {
+        line += &format!(
+            " · error {:.2}% RMSE, energy {:+.2}%",
+            100.0 * e.relative_rmse,
+            100.0 * e.energy_error
+        );
+        if let Some(t) = s.reference_ms {
+            line += &format!(" (reference {:.1} s)", t / 1e3);
+        }
+    }
+    line
+}
+
+/// The backend as one line of text.
+pub fn backend_line(f: &FlareFrame) -> String {
+    let b = &f.backend;
+    let mut s = format!("backend {}", b.backend);
+    if let Some(a) = &b.adapter {
+        s += &format!(" on {a}");
+        if let Some(api) = &b.api {
+            s += &format!(" ({api})");
+        }
+        if b.software_adapter {
+            s += ", software";
+        }
+    }
+    if let Some(n) = &b.note {
+        s += &format!(" — {n}");
+    }
+    s
+}
+
+/// Draws the status lines.
+pub fn show(ui: &mut Ui, v: &Viewer) {
+    if let Some(m) = &v.message {
+        let colour = if m.contains("panicked") || m.contains("failed") {
+            Color32::from_rgb(220, 60, 60)
+        } else {
+            ui.visuals().text_color()
+        };
+        ui.label(RichText::new(m).color(colour));
+    }
+    match v.frame_shown() {
+        Some(f) => {
+            ui.label(frame_line(f));
+            let mut extra = backend_line(f);
+            if let Some(g) = v.selected_ghost() {
+                extra += &format!(" · ghost {g}");
+                if v.scene().solo.is_some() {
+                    extra += " alone";
+                }
+            }
+            ui.label(extra);
+        }
+        None => {
+            ui.label("rendering the first frame…");
+        }
+    }
+    if let Some(d) = v.hovered_description() {
+        ui.label(d);
+    }
+}
