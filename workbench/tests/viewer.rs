@@ -101,14 +101,20 @@ fn difference(a: &image::RgbaImage, b: &image::RgbaImage) -> (f64, f64) {
 /// Where the flare image is drawn (points = pixels here): found from the layout the viewer
 /// logs.
 fn flare_rect(log: &std::sync::Mutex<Vec<String>>) -> egui::Rect {
+    view_rect(log, "flare")
+}
+
+/// Where view `name` (`lens` or `flare`) is, from the layout the viewer logs.
+fn view_rect(log: &std::sync::Mutex<Vec<String>>, name: &str) -> egui::Rect {
     let lines = log.lock().unwrap();
+    let head = format!("{name} view at ");
     let line = lines
         .iter()
         .rev()
-        .find(|l| l.starts_with("flare view at"))
+        .find(|l| l.starts_with(&head))
         .expect("the viewer logs its layout");
     let nums: Vec<f32> = line
-        .trim_start_matches("flare view at ")
+        .trim_start_matches(&head)
         .split([',', ' ', 'x'])
         .filter_map(|t| t.parse().ok())
         .collect();
@@ -133,16 +139,40 @@ fn press(pos: Pos2, pressed: bool) -> Event {
     }
 }
 
+/// The part of `img` inside `r`.
+fn crop(img: &image::RgbaImage, r: egui::Rect) -> image::RgbaImage {
+    image::imageops::crop_imm(
+        img,
+        r.min.x as u32,
+        r.min.y as u32,
+        r.width() as u32,
+        r.height() as u32,
+    )
+    .to_image()
+}
+
 #[test]
-fn the_views_drawn_offscreen_match_their_golden_image() {
-    let mut viewer = Viewer::new(lens("heliar-tronnier"), options(), Box::new(|| {}));
+fn the_views_drawn_offscreen_match_their_golden_images() {
+    let (mut viewer, log) = logged(Viewer::new(
+        lens("heliar-tronnier"),
+        options(),
+        Box::new(|| {}),
+    ));
     let mut target = Offscreen::new(WINDOW.0, WINDOW.1).unwrap();
     settled(&mut viewer, &mut target);
     let f = viewer.frame_shown().unwrap();
     assert!(f.stats.ghosts_drawn > 0, "the Heliar at 8° draws ghosts");
     assert!(!f.hdr.has_non_finite());
     let img = target.read().unwrap();
-    assert_golden(&img, "viewer-heliar.png");
+    // The views, not the status line (its times differ from run to run).
+    assert_golden(
+        &crop(&img, view_rect(&log, "lens")),
+        "viewer-heliar-lens.png",
+    );
+    assert_golden(
+        &crop(&img, view_rect(&log, "flare")),
+        "viewer-heliar-flare.png",
+    );
 }
 
 #[test]
@@ -289,4 +319,55 @@ fn an_edit_through_the_document_channel_redraws_lens_and_flare() {
     assert!(far > 0.001, "the window did not change after the edit");
     let energy_after = viewer.frame_shown().unwrap().hdr.sum();
     assert_ne!(energy_before, energy_after, "the flare did not change");
+}
+
+#[test]
+fn the_wheel_changes_the_exposure_without_rendering_anew() {
+    let (mut viewer, log) = logged(Viewer::new(
+        lens("heliar-tronnier"),
+        options(),
+        Box::new(|| {}),
+    ));
+    let mut target = Offscreen::new(WINDOW.0, WINDOW.1).unwrap();
+    settled(&mut viewer, &mut target);
+    let id = viewer.frame_shown().unwrap().id;
+    let rect = flare_rect(&log);
+    let before = target.read().unwrap();
+    let wheel = Event::MouseWheel {
+        unit: egui::MouseWheelUnit::Line,
+        delta: egui::vec2(0.0, 2.0),
+        phase: egui::TouchPhase::Move,
+        source: egui::MouseWheelSource::Unknown,
+        modifiers: Default::default(),
+    };
+    target.pass(&mut viewer, vec![Event::PointerMoved(rect.center()), wheel]);
+    target.pass(&mut viewer, vec![]);
+    assert_eq!(
+        viewer.scene().exposure_offset_ev,
+        1.0,
+        "two notches: one stop"
+    );
+    assert_eq!(viewer.frame_shown().unwrap().id, id, "no new render");
+    let after = target.read().unwrap();
+    // One stop brighter: the flare's mean level rises, the lens view stays.
+    let mean = |img: &image::RgbaImage| {
+        let mut s = 0u64;
+        let mut n = 0u64;
+        for y in rect.min.y as u32 + 2..rect.max.y as u32 - 2 {
+            for x in rect.min.x as u32 + 2..rect.max.x as u32 - 2 {
+                s += img.get_pixel(x, y).0[..3]
+                    .iter()
+                    .map(|&c| c as u64)
+                    .sum::<u64>();
+                n += 3;
+            }
+        }
+        s as f64 / n as f64
+    };
+    assert!(
+        mean(&after) > 1.1 * mean(&before),
+        "{} → {}",
+        mean(&before),
+        mean(&after)
+    );
 }

@@ -57,6 +57,11 @@ impl View {
         }
     }
 
+    /// Takes in the lines logged so far.
+    fn drain(&mut self) {
+        self.seen.extend(self.lines.try_iter());
+    }
+
     /// Waits for a logged line for which `want` holds; panics with the log after `secs`.
     fn wait_for(&mut self, secs: u64, want: impl Fn(&str) -> bool) -> String {
         let end = Instant::now() + Duration::from_secs(secs);
@@ -108,10 +113,11 @@ impl Drop for View {
     }
 }
 
-/// (x, y, w, h) of the `flare view at X,Y size WxH` line.
-fn flare_rect(line: &str) -> [i32; 4] {
+/// (x, y, w, h) of a `NAME view at X,Y size WxH` line.
+fn view_rect(line: &str) -> [i32; 4] {
     let v: Vec<i32> = line
-        .trim_start_matches("flare view at ")
+        .split_once(" view at ")
+        .map_or("", |(_, rest)| rest)
         .split([',', ' ', 'x'])
         .filter_map(|t| t.parse().ok())
         .collect();
@@ -124,7 +130,7 @@ fn golden(name: &str) -> PathBuf {
         .join(name)
 }
 
-/// Share of pixels of `a`'s top-left `w × h` differing from `b` by more than 24 levels.
+/// Share of the pixels of `a` differing from `b` by more than 24 levels.
 fn far_share(a: &image::RgbImage, b: &image::RgbaImage) -> f64 {
     let (w, h) = b.dimensions();
     let mut far = 0;
@@ -168,17 +174,30 @@ fn the_window_follows_a_drag_a_click_and_keys_and_looks_like_its_golden_image() 
     x.xdotool(&["mousemove", "5", "5"]);
     std::thread::sleep(Duration::from_millis(1500));
     let shot = x.screenshot();
-    let want = image::open(golden("viewer-heliar.png")).unwrap().to_rgba8();
-    let far = far_share(&shot, &want);
-    if far > 0.01 {
-        let dir = temp_dir("window-shot").keep();
-        let out = dir.join("window.png");
-        shot.save(&out).unwrap();
-        panic!(
-            "the window differs from the offscreen golden image in {:.2}% of its pixels ({})",
-            100.0 * far,
-            out.display()
-        );
+    view.drain();
+    // Both views against the offscreen golden images (tests/viewer.rs), same scene and size.
+    for name in ["lens", "flare"] {
+        let head = format!("{name} view at");
+        let line = view.seen.iter().rev().find(|l| l.starts_with(&head));
+        let [vx, vy, vw, vh] = view_rect(line.expect("the window logs its layout"));
+        let got =
+            image::imageops::crop_imm(&shot, vx as u32, vy as u32, vw as u32, vh as u32).to_image();
+        let want = image::open(golden(&format!("viewer-heliar-{name}.png")))
+            .unwrap()
+            .to_rgba8();
+        assert_eq!(got.dimensions(), want.dimensions(), "{name} view size");
+        let far = far_share(&got, &want);
+        if far > 0.01 {
+            let dir = temp_dir("window-shot").keep();
+            let out = dir.join("window.png");
+            shot.save(&out).unwrap();
+            panic!(
+                "the window's {name} view differs from the offscreen golden image in {:.2}% of \
+                 its pixels ({})",
+                100.0 * far,
+                out.display()
+            );
+        }
     }
 
     // A drag in the flare view moves the light: a frame at a new light follows.
@@ -187,7 +206,7 @@ fn the_window_follows_a_drag_a_click_and_keys_and_looks_like_its_golden_image() 
         .iter()
         .rev()
         .find(|l| l.starts_with("flare view at"));
-    let [fx, fy, fw, fh] = flare_rect(layout.expect("the window logs its layout"));
+    let [fx, fy, fw, fh] = view_rect(layout.expect("the window logs its layout"));
     let (cx, cy) = (fx + fw / 2, fy + fh / 2);
     let (tx, ty) = (fx + fw * 4 / 5, fy + fh / 4);
     let s = |v: i32| v.to_string();

@@ -98,8 +98,8 @@ pub struct Viewer {
     saved: usize,
     /// Where `--log` lines go (frames shown, selections, layout), if anywhere.
     log: Option<LogSink>,
-    /// The flare view's rectangle (points) last logged.
-    logged_rect: Option<egui::Rect>,
+    /// The lens and flare views' rectangles (points) last logged.
+    logged_rects: [Option<egui::Rect>; 2],
 }
 
 impl std::fmt::Debug for Viewer {
@@ -157,7 +157,7 @@ impl Viewer {
             link: None,
             saved: 0,
             log: None,
-            logged_rect: None,
+            logged_rects: [None; 2],
         };
         v.rebuild_lens();
         v
@@ -343,7 +343,8 @@ impl Viewer {
                         f.quality.name(),
                         f.stats.total_ms
                     ));
-                    self.texture_offset_ev = self.scene.exposure_offset_ev;
+                    // Toned at the offset of its job; re-toned if the wheel moved since.
+                    self.texture_offset_ev = f.exposure_offset_ev;
                     self.shown = Some(*f);
                     self.texture = None;
                     if self
@@ -434,6 +435,7 @@ impl Viewer {
                     selected_row: self.selected_row,
                 };
                 let r = lens_view::show(ui, &self.drawing, &overlay, &mut self.camera);
+                self.log_rect(0, "lens", r.rect);
                 self.hovered_row = r.hovered_row;
                 if let Some(row) = r.clicked_row {
                     self.selected_row = Some(row);
@@ -445,19 +447,24 @@ impl Viewer {
             });
         egui::CentralPanel::default().show(ui, |ui| {
             let (rect, action) = flare_view::show(ui, self);
-            if self.log.is_some() && self.logged_rect != Some(rect) {
-                self.logged_rect = Some(rect);
-                self.log(format!(
-                    "flare view at {:.0},{:.0} size {:.0}x{:.0}",
-                    rect.min.x,
-                    rect.min.y,
-                    rect.width(),
-                    rect.height()
-                ));
-            }
+            self.log_rect(1, "flare", rect);
             self.apply(action);
         });
         self.take_inputs();
+    }
+
+    /// Logs where view `k` (`name`) is when it moved.
+    fn log_rect(&mut self, k: usize, name: &str, rect: egui::Rect) {
+        if self.log.is_some() && self.logged_rects[k] != Some(rect) {
+            self.logged_rects[k] = Some(rect);
+            self.log(format!(
+                "{name} view at {:.0},{:.0} size {:.0}x{:.0}",
+                rect.min.x,
+                rect.min.y,
+                rect.width(),
+                rect.height()
+            ));
+        }
     }
 
     /// The row under the mouse in the lens view, with its data, for the status line.
@@ -493,7 +500,7 @@ impl Viewer {
         if self.texture.is_some() && self.texture_offset_ev == self.scene.exposure_offset_ev {
             return;
         }
-        let rgba = if self.texture_offset_ev == self.scene.exposure_offset_ev {
+        let rgba = if f.exposure_offset_ev == self.scene.exposure_offset_ev {
             f.rgba.clone()
         } else {
             super::flare_worker::tone_rgba(

@@ -111,9 +111,9 @@ pub fn show(ui: &mut Ui, viewer: &Viewer) -> (Rect, FlareAction) {
 
     let mut action = FlareAction::None;
     if response.hovered() {
-        let scroll = ui.input(|i| i.smooth_scroll_delta.y);
-        if scroll != 0.0 {
-            action = FlareAction::Exposure(scroll / 120.0);
+        let stops = ui.input(|i| i.events.iter().map(wheel_stops).sum::<f32>());
+        if stops != 0.0 {
+            action = FlareAction::Exposure(stops);
         }
     }
     if (response.dragged() || response.drag_stopped())
@@ -131,6 +131,19 @@ pub fn show(ui: &mut Ui, viewer: &Viewer) -> (Rect, FlareAction) {
         action = FlareAction::SelectGhost(g.path);
     }
     (rect, action)
+}
+
+/// Exposure change (stops) of a wheel event: half a stop per notch (a line), two per page,
+/// one per 100 points of a touchpad's scroll.
+pub fn wheel_stops(e: &egui::Event) -> f32 {
+    match e {
+        egui::Event::MouseWheel { unit, delta, .. } => match unit {
+            egui::MouseWheelUnit::Line => 0.5 * delta.y,
+            egui::MouseWheelUnit::Page => 2.0 * delta.y,
+            egui::MouseWheelUnit::Point => delta.y / 100.0,
+        },
+        _ => 0.0,
+    }
 }
 
 /// Each ghost's name at the centre of where it lands (only the selected one's unless `all`);

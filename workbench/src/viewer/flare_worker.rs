@@ -105,8 +105,10 @@ pub struct FlareFrame {
     pub quality: Quality,
     /// The linear image (ghosts and starbursts).
     pub hdr: Arc<HdrImage>,
-    /// Tone mapped, 8-bit sRGB with opaque alpha, rows top to bottom.
+    /// Tone mapped, 8-bit sRGB with opaque alpha, rows top to bottom, at the automatic
+    /// exposure plus `exposure_offset_ev`.
     pub rgba: Vec<u8>,
+    pub exposure_offset_ev: f32,
     pub stats: FrameStats,
     pub ghosts: Vec<GhostFootprint>,
     pub backend: BackendReport,
@@ -447,6 +449,7 @@ impl Renderer {
             quality,
             hdr: Arc::new(img),
             rgba,
+            exposure_offset_ev: scene.exposure_offset_ev,
             stats,
             ghosts,
             backend,

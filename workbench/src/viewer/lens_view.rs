@@ -71,8 +71,10 @@ pub struct LensOverlay<'a> {
 }
 
 /// The result of drawing the lens view for one frame.
-#[derive(Debug, Default)]
+#[derive(Debug)]
 pub struct LensViewResponse {
+    /// Where the view is (points).
+    pub rect: Rect,
     /// The row under the mouse, if any.
     pub hovered_row: Option<usize>,
     /// The row clicked.
@@ -242,6 +244,7 @@ pub fn show(
             .on_hover_text_at_pointer(format!("surface row {row}"));
     }
     LensViewResponse {
+        rect,
         hovered_row,
         clicked_row: if response.clicked() {
             hovered_row
