@@ -73,7 +73,7 @@ fn bench(c: &mut Criterion) {
             b.iter(|| {
                 k += 1;
                 // Back and forth between two directions in the frame.
-                let theta = if k % 2 == 0 { 8.0 } else { 6.0 };
+                let theta = if k.is_multiple_of(2) { 8.0 } else { 6.0 };
                 v.move_light(0, theta, 30.0 + (k % 7) as f64);
                 wait_shown(&mut v, &mut target);
             })
