@@ -15,6 +15,7 @@ pub mod lens_drawing;
 pub mod lens_library;
 pub mod link;
 pub mod output;
+pub mod panics;
 pub mod plugin_dirs;
 pub mod precomputed;
 pub mod reference_file;

@@ -304,3 +304,63 @@ fn edit_with_a_window_but_no_display_runs_the_editor_with_a_note() {
     tmux.wait_for("[modified]");
     tmux.keys(&[":", "q", "!", "Enter"]);
 }
+
+#[test]
+#[cfg(feature = "window")]
+fn a_render_panic_beside_the_editor_loses_no_edit() {
+    use common::x11::{Xvfb, x_tools};
+    if !tmux_available() || !x_tools() {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "tmux or X tools missing under CI"
+        );
+        return;
+    }
+    let tmp = common::temp_dir("edit-window-panic");
+    let path = tmp.path().join("heliar-tronnier.xml");
+    std::fs::copy(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../lenses/heliar-tronnier.xml"),
+        &path,
+    )
+    .unwrap();
+    let x = Xvfb::start();
+    let tmux = Tmux {
+        socket: format!("flarebench-e2e-panic-{}", std::process::id()),
+    };
+    // Every render panics (fault injection): the window says so, the editor goes on.
+    let command = format!(
+        "env DISPLAY={} FLAREBENCH_FAULT=render-panic '{}' edit --window '{}'",
+        x.display,
+        env!("CARGO_BIN_EXE_flarebench"),
+        path.display()
+    );
+    let out = tmux.run(&[
+        "new-session",
+        "-d",
+        "-s",
+        "e2e",
+        "-x",
+        "120",
+        "-y",
+        "40",
+        &command,
+    ]);
+    assert!(out.status.success(), "tmux new-session: {out:?}");
+    tmux.wait_for("flarebench edit — heliar-tronnier.xml");
+    std::thread::sleep(Duration::from_millis(2000));
+    tmux.keys(&["j", "l", "Enter", "C-u", "7", ".", "5", "Enter"]);
+    tmux.wait_for("[modified]");
+    tmux.keys(&["C-s"]);
+    tmux.wait_for("saved ");
+    tmux.keys(&["q"]);
+    let start = Instant::now();
+    while tmux.session_alive() {
+        assert!(
+            start.elapsed() < Duration::from_secs(20),
+            "the editor did not quit"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    let saved = read_lens(&path).unwrap().system;
+    assert_eq!(saved.surfaces[1].thickness, 7.5);
+}

@@ -52,6 +52,9 @@ pub fn run_with(app: App, host: Option<WindowHost>) -> anyhow::Result<()> {
         "`flarebench edit` needs a terminal (standard output is not one)"
     );
     let mut terminal = ratatui::try_init().context("could not set up the terminal")?;
+    // ratatui's hook restores the terminal on any panic; not for the viewer's render thread,
+    // whose panics are caught and shown in the window's status line.
+    crate::panics::install_hook();
     // Mouse selection where the terminal supports it; ignored elsewhere.
     let _ = execute!(stdout(), EnableMouseCapture);
     let result = event_loop(&mut terminal, app, host);

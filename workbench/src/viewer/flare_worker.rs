@@ -176,9 +176,14 @@ impl FlareWorker {
         });
         let (tx, events) = channel();
         let s = Arc::clone(&shared);
+        crate::panics::install_hook_once();
         let thread = std::thread::Builder::new()
             .name("flare-render".into())
-            .spawn(move || serve(&s, backend, &tx, &waker))
+            .spawn(move || {
+                // A render's panic is caught and shown in the status line, not printed.
+                crate::panics::caught_here();
+                serve(&s, backend, &tx, &waker)
+            })
             .expect("spawning the render thread");
         FlareWorker {
             shared,
