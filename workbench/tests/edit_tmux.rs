@@ -84,35 +84,16 @@ fn edit_a_cell_save_and_quit_in_a_real_terminal() {
     // reverse order) and the editor it runs.
     let tmp = common::temp_dir("edit-tmux");
     let dir = tmp.path();
-    let path = dir.join("heliar-tronnier.xml");
-    std::fs::copy(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../lenses/heliar-tronnier.xml"),
-        &path,
-    )
-    .unwrap();
+    let path = heliar_copy(dir);
     let original = read_lens(&path).unwrap().system;
     assert_ne!(original.surfaces[1].thickness, 7.5);
 
-    let tmux = Tmux {
-        socket: format!("flarebench-e2e-{}", std::process::id()),
-    };
     let command = format!(
         "'{}' edit '{}'",
         env!("CARGO_BIN_EXE_flarebench"),
         path.display()
     );
-    let out = tmux.run(&[
-        "new-session",
-        "-d",
-        "-s",
-        "e2e",
-        "-x",
-        "120",
-        "-y",
-        "40",
-        &command,
-    ]);
-    assert!(out.status.success(), "tmux new-session: {out:?}");
+    let tmux = session("edit", 120, &command);
     tmux.wait_for("flarebench edit — heliar-tronnier.xml");
 
     // Surface 1, thickness column: edit, clear, type 7.5, accept.
@@ -164,6 +145,39 @@ fn without_a_terminal_or_a_lens_the_errors_are_clear() {
     );
 }
 
+/// A copy of the bundled Heliar-Tronnier in `dir`, to edit and save.
+fn heliar_copy(dir: &Path) -> std::path::PathBuf {
+    let path = dir.join("heliar-tronnier.xml");
+    std::fs::copy(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../lenses/heliar-tronnier.xml"),
+        &path,
+    )
+    .unwrap();
+    path
+}
+
+/// A detached tmux session `e2e` (`cols` × 40) of a server named after `tag`, running the
+/// shell `command`.
+fn session(tag: &str, cols: u16, command: &str) -> Tmux {
+    let tmux = Tmux {
+        socket: format!("flarebench-e2e-{tag}-{}", std::process::id()),
+    };
+    let cols = cols.to_string();
+    let out = tmux.run(&[
+        "new-session",
+        "-d",
+        "-s",
+        "e2e",
+        "-x",
+        &cols,
+        "-y",
+        "40",
+        command,
+    ]);
+    assert!(out.status.success(), "tmux new-session: {out:?}");
+    tmux
+}
+
 /// The share of pixels in `rect` (x, y, w, h) that differ between two screenshots.
 fn changed(a: &image::RgbImage, b: &image::RgbImage, rect: [u32; 4]) -> f64 {
     let [x0, y0, w, h] = rect;
@@ -191,34 +205,15 @@ fn edit_with_a_window_shows_each_edit_in_the_window() {
         return;
     }
     let tmp = common::temp_dir("edit-window");
-    let path = tmp.path().join("heliar-tronnier.xml");
-    std::fs::copy(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../lenses/heliar-tronnier.xml"),
-        &path,
-    )
-    .unwrap();
+    let path = heliar_copy(tmp.path());
     let x = Xvfb::start();
-    let tmux = Tmux {
-        socket: format!("flarebench-e2e-window-{}", std::process::id()),
-    };
     let command = format!(
         "env DISPLAY={} '{}' edit --window '{}'",
         x.display,
         env!("CARGO_BIN_EXE_flarebench"),
         path.display()
     );
-    let out = tmux.run(&[
-        "new-session",
-        "-d",
-        "-s",
-        "e2e",
-        "-x",
-        "120",
-        "-y",
-        "40",
-        &command,
-    ]);
-    assert!(out.status.success(), "tmux new-session: {out:?}");
+    let tmux = session("window", 120, &command);
     tmux.wait_for("flarebench edit — heliar-tronnier.xml");
 
     // The window (at the screen's top-left corner: Xvfb has no window manager) settles: two
@@ -279,25 +274,11 @@ fn edit_with_a_window_but_no_display_runs_the_editor_with_a_note() {
         assert!(std::env::var_os("CI").is_none(), "tmux missing under CI");
         return;
     }
-    let tmux = Tmux {
-        socket: format!("flarebench-e2e-nodisplay-{}", std::process::id()),
-    };
     let command = format!(
         "env -u DISPLAY -u WAYLAND_DISPLAY '{}' edit --window heliar-tronnier",
         env!("CARGO_BIN_EXE_flarebench")
     );
-    let out = tmux.run(&[
-        "new-session",
-        "-d",
-        "-s",
-        "e2e",
-        "-x",
-        "160",
-        "-y",
-        "40",
-        &command,
-    ]);
-    assert!(out.status.success(), "tmux new-session: {out:?}");
+    let tmux = session("nodisplay", 160, &command);
     tmux.wait_for("no window: cannot open a window");
     // The editor works: an edit goes in.
     tmux.keys(&["j", "l", "Enter", "C-u", "7", ".", "5", "Enter"]);
@@ -317,16 +298,8 @@ fn a_render_panic_beside_the_editor_loses_no_edit() {
         return;
     }
     let tmp = common::temp_dir("edit-window-panic");
-    let path = tmp.path().join("heliar-tronnier.xml");
-    std::fs::copy(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../lenses/heliar-tronnier.xml"),
-        &path,
-    )
-    .unwrap();
+    let path = heliar_copy(tmp.path());
     let x = Xvfb::start();
-    let tmux = Tmux {
-        socket: format!("flarebench-e2e-panic-{}", std::process::id()),
-    };
     // Every render panics (fault injection): the window says so, the editor goes on.
     let command = format!(
         "env DISPLAY={} FLAREBENCH_FAULT=render-panic '{}' edit --window '{}'",
@@ -334,18 +307,7 @@ fn a_render_panic_beside_the_editor_loses_no_edit() {
         env!("CARGO_BIN_EXE_flarebench"),
         path.display()
     );
-    let out = tmux.run(&[
-        "new-session",
-        "-d",
-        "-s",
-        "e2e",
-        "-x",
-        "120",
-        "-y",
-        "40",
-        &command,
-    ]);
-    assert!(out.status.success(), "tmux new-session: {out:?}");
+    let tmux = session("panic", 120, &command);
     tmux.wait_for("flarebench edit — heliar-tronnier.xml");
     std::thread::sleep(Duration::from_millis(2000));
     tmux.keys(&["j", "l", "Enter", "C-u", "7", ".", "5", "Enter"]);
