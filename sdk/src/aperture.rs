@@ -262,6 +262,56 @@ impl ApertureSampler<'_> {
         smooth_edge(f64::from(self.signed_distance(u, v)), f64::from(feather)) as f32
     }
 
+    /// Where [`Self::transmission_soft`] with `feather` is the same at every point within
+    /// `radius` of `(u, v)`: `Some(1.0)` wholly open, `Some(0.0)` wholly closed, `None` where
+    /// it may vary. Exact for the circle and the iris (their signed distance is a true
+    /// distance, whose slope is 1: open where `d + radius ≤ −feather/2`, up to a rounding
+    /// slack); conservative for a mask ([`ApertureMask::uniform_around`]). `None` for a
+    /// feather that is not positive.
+    #[inline]
+    pub fn uniform_around(&self, u: f32, v: f32, radius: f32, feather: f32) -> Option<f32> {
+        #[allow(
+            clippy::neg_cmp_op_on_partial_ord,
+            reason = "NaN feather or radius means no answer"
+        )]
+        if !(feather > 0.0) || !(radius >= 0.0) {
+            return None;
+        }
+        if let Shape::Mask(m) = self.shape {
+            return m.uniform_around(u, v, radius, feather);
+        }
+        let d = f64::from(self.signed_distance(u, v));
+        let margin = f64::from(radius) + 0.5 * f64::from(feather) + UNIFORM_SLACK;
+        if d <= -margin {
+            Some(1.0)
+        } else if d >= margin {
+            Some(0.0)
+        } else {
+            None
+        }
+    }
+
+    /// [`Self::transmission_soft`] at `(u, v)`, and a distance within which it is the same
+    /// (0 where this cannot tell, or the transmission is partial there): the reach of
+    /// [`Self::uniform_around`]'s answer, from one evaluation, for stepping along a path.
+    #[inline]
+    pub fn transmission_reach(&self, u: f32, v: f32, feather: f32) -> (f32, f32) {
+        #[allow(
+            clippy::neg_cmp_op_on_partial_ord,
+            reason = "NaN feather means no feather"
+        )]
+        if !(feather > 0.0) {
+            return (self.transmission(u, v), 0.0);
+        }
+        if let Shape::Mask(m) = self.shape {
+            return m.transmission_reach(u, v, feather);
+        }
+        let d = f64::from(self.signed_distance(u, v));
+        let reach = d.abs() - 0.5 * f64::from(feather) - UNIFORM_SLACK;
+        let t = smooth_edge(d, f64::from(feather)) as f32;
+        (t, if reach > 0.0 { reach as f32 } else { 0.0 })
+    }
+
     /// See [`Aperture::signed_distance`].
     #[inline]
     pub fn signed_distance(&self, u: f32, v: f32) -> f32 {
@@ -276,10 +326,19 @@ impl ApertureSampler<'_> {
     }
 }
 
+/// Normalised units added to [`ApertureSampler::uniform_around`]'s margin for the roundings
+/// of f32 positions and distances (a feather is at least 1e-4).
+const UNIFORM_SLACK: f64 = 1e-6;
+
+/// An [`ApertureSampler`] of the circle, borrowing nothing.
+pub const CIRCLE_SAMPLER: ApertureSampler<'static> = ApertureSampler {
+    shape: Shape::Circle,
+};
+
 /// The smooth step across an edge at signed distance `d` over a band of width `feather`:
 /// 1 well inside, 0 well outside, 1/2 on the edge, odd about it; a NaN distance gives 0.
 #[inline]
-fn smooth_edge(d: f64, feather: f64) -> f64 {
+pub(crate) fn smooth_edge(d: f64, feather: f64) -> f64 {
     let t = 0.5 - d / feather;
     let t = if t >= 1.0 {
         1.0

@@ -4,12 +4,12 @@
 use std::f64::consts::FRAC_PI_2;
 use std::path::Path;
 
-use flarebench_sdk::aperture::Aperture;
+use flarebench_sdk::aperture::{Aperture, ApertureMask};
 use flarebench_sdk::frame::Frame;
 use flarebench_sdk::fresnel;
 use flarebench_sdk::ghost::bounds::{self, GhostBounds};
 use flarebench_sdk::ghost::context::{Band, GhostContext, GhostGrid, GhostLight};
-use flarebench_sdk::ghost::fringe::mesh_ghost_fringed;
+use flarebench_sdk::ghost::fringe::{APERTURE_FLAG, mesh_ghost_fringed};
 use flarebench_sdk::ghost::mesh::GhostMesh;
 use flarebench_sdk::ghost::render::{GhostScratch, mesh_ghost, rasterize_ghost_mesh, render_ghost};
 use flarebench_sdk::ghost::{GhostPath, GridTrace, enumerate_ghosts};
@@ -53,6 +53,9 @@ const UNDISPERSED_ENERGY_TOL: f64 = 1e-5;
 const DISPERSED_COLOUR_SUM_TOL: f64 = 3e-3;
 /// A dispersive fringed ghost's relative RMSE against the bands': measured 1.2% (7-4, 8 bands).
 const DISPERSED_RMSE: f64 = 0.03;
+/// A fringed ghost's triangles through an iris or a mask over its triangles through the
+/// circle.
+const FRINGED_TRIANGLES_OVER_CIRCLE: f64 = 1.3;
 
 fn frame(sys: &LensSystem, px: usize) -> Frame {
     Frame {
@@ -417,7 +420,8 @@ fn bands(sys: &LensSystem, m: usize) -> (Vec<Band>, Vec<f64>) {
     (bands, edges)
 }
 
-/// The ghost `path` of `sys` at `theta` on a `px`-pixel-wide frame, fringed and band by band.
+/// The ghost `path` of `sys` at `theta` on a `px`-pixel-wide frame, fringed and band by band,
+/// through the circular stop.
 fn both(
     sys: &LensSystem,
     path: GhostPath,
@@ -425,6 +429,19 @@ fn both(
     m: usize,
     n: usize,
     px: usize,
+) -> (HdrImage, HdrImage, GhostMesh) {
+    both_through(sys, path, theta, m, n, px, &Aperture::Circular)
+}
+
+/// [`both`] through `aperture`.
+fn both_through(
+    sys: &LensSystem,
+    path: GhostPath,
+    theta: f64,
+    m: usize,
+    n: usize,
+    px: usize,
+    aperture: &Aperture,
 ) -> (HdrImage, HdrImage, GhostMesh) {
     let b = precise_bounds(sys, path, theta);
     let mut scratch = GridTrace::default();
@@ -435,10 +452,9 @@ fn both(
         film_width_mm: sys.film_width_mm,
         film_height_mm: sys.film_width_mm * height as f64 / px as f64,
     };
-    let aperture = Aperture::Circular;
     let ctx = GhostContext {
         system: sys,
-        aperture: &aperture,
+        aperture,
         frame,
         stop_radius: stop_opening(sys),
         f_number: analyse(sys, 587.6).map(|p| p.f_number).unwrap_or(4.0),
@@ -462,9 +478,9 @@ fn both(
     let mut one_by_one = GhostMesh::default();
     mesh_ghost(&ctx, &ghost, &refs, &mut scratch, &mut one_by_one);
     let mut a = HdrImage::new(px, height);
-    rasterize_ghost_mesh(&mut a, &fringed, &aperture);
+    rasterize_ghost_mesh(&mut a, &fringed, aperture);
     let mut c = HdrImage::new(px, height);
-    rasterize_ghost_mesh(&mut c, &one_by_one, &aperture);
+    rasterize_ghost_mesh(&mut c, &one_by_one, aperture);
     (a, c, fringed)
 }
 
@@ -517,4 +533,106 @@ fn a_dispersive_ghost_fringed_keeps_its_light_and_shape() {
         "relative RMSE {:.3e}",
         c.relative_rmse
     );
+}
+
+/// A six-blade iris with rounded blades, turned.
+fn iris() -> Aperture {
+    Aperture::Iris {
+        blades: 6,
+        rotation_rad: 0.3,
+        roundness: 0.2,
+    }
+}
+
+/// OpenLensFlare's aperture mask (`lenses/masks/aperture.bmp`, 8-bit grey).
+fn olf_mask() -> Aperture {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../lenses/masks/aperture.bmp");
+    let img = image::open(&path).expect("the bundled mask").to_luma8();
+    let (w, h) = img.dimensions();
+    let mask = ApertureMask::from_luma(w as usize, h as usize, img.as_raw()).expect("a mask");
+    Aperture::Mask(mask)
+}
+
+/// Through an iris or a mask, an undispersed fringed ghost is still its bands' sum: the
+/// aperture's transmission stepped over τ is the same at every step.
+#[test]
+fn without_dispersion_a_fringed_iris_or_mask_ghost_is_the_bands_sum() {
+    let sys = plate();
+    for (name, aperture) in [("iris", iris()), ("mask", olf_mask())] {
+        let (fringed, bands, mesh) = both_through(
+            &sys,
+            GhostPath::two(2, 1),
+            8f64.to_radians(),
+            7,
+            33,
+            300,
+            &aperture,
+        );
+        assert!(
+            !mesh.fringe.is_empty() && mesh.edge.is_empty(),
+            "{name}: drawn fringed"
+        );
+        assert!(
+            mesh.fringe
+                .attrs
+                .iter()
+                .any(|a| a[10] > APERTURE_FLAG - 0.5),
+            "{name}: the aperture's outline is flagged"
+        );
+        assert!(!fringed.has_non_finite());
+        let c = fringed.compare(&bands).unwrap();
+        eprintln!(
+            "{name}: relative RMSE {:.2e}, energy {:.2e}",
+            c.relative_rmse, c.energy_error
+        );
+        assert!(
+            c.relative_rmse < UNDISPERSED_RMSE && c.energy_error.abs() < UNDISPERSED_ENERGY_TOL,
+            "{name}: relative RMSE {:.2e}, energy {:.2e}",
+            c.relative_rmse,
+            c.energy_error
+        );
+    }
+}
+
+/// The dispersive Heliar ghost of [`a_dispersive_ghost_fringed_keeps_its_light_and_shape`]
+/// through an iris and a mask: fringed against band by band within the circle's bounds, and
+/// about as many triangles as through the circle.
+#[test]
+fn a_dispersive_iris_or_mask_ghost_fringed_keeps_its_light_and_shape() {
+    let lens = Path::new(env!("CARGO_MANIFEST_DIR")).join("../lenses/heliar-tronnier.xml");
+    let sys = read_lens(&lens).unwrap().system;
+    let theta = 10f64.to_radians();
+    let (_, _, circle) = both(&sys, GhostPath::two(7, 4), theta, 8, 17, 480);
+    let circle_triangles = circle.open.len() + circle.edge.len() + circle.fringe.len();
+    for (name, aperture) in [("iris", iris()), ("mask", olf_mask())] {
+        let (fringed, bands, mesh) =
+            both_through(&sys, GhostPath::two(7, 4), theta, 8, 17, 480, &aperture);
+        assert!(!mesh.fringe.is_empty(), "{name}: drawn fringed");
+        assert!(!fringed.has_non_finite());
+        let triangles = mesh.open.len() + mesh.edge.len() + mesh.fringe.len();
+        let c = fringed.compare(&bands).unwrap();
+        let (a, b) = (fringed.sum(), bands.sum());
+        eprintln!(
+            "{name}: {triangles} triangles (circle {circle_triangles}), relative RMSE {:.3e}, \
+             sums {a:?} against {b:?}",
+            c.relative_rmse
+        );
+        assert!(
+            triangles as f64 <= FRINGED_TRIANGLES_OVER_CIRCLE * circle_triangles as f64,
+            "{name}: {triangles} triangles against the circle's {circle_triangles}"
+        );
+        for ch in 0..3 {
+            assert!(
+                (a[ch] / b[ch] - 1.0).abs() < DISPERSED_COLOUR_SUM_TOL,
+                "{name}: channel {ch}: {} against {}",
+                a[ch],
+                b[ch]
+            );
+        }
+        assert!(
+            c.relative_rmse < DISPERSED_RMSE,
+            "{name}: relative RMSE {:.3e}",
+            c.relative_rmse
+        );
+    }
 }

@@ -339,7 +339,6 @@ fn render_groups(
         let px = ctx.frame.pixel_mm();
         !options.band_by_band
             && job.spectral()
-            && matches!(ctx.aperture, Aperture::Circular)
             && job.bounds.sensor.area() / (px * px) >= FRINGE_MIN_PIXELS * triangles as f64
     };
     let units: Vec<(usize, usize, std::ops::Range<usize>, usize)> = groups

@@ -42,6 +42,13 @@ pub struct ApertureMask {
     data: Vec<f32>,
     /// Signed distance to the edge at each texel centre (normalised units, negative inside).
     distance: Vec<f32>,
+    /// Every texel is 0 or 1 and the texels are at most twice as wide as tall (or tall as
+    /// wide): then [`ApertureMask::uniform_around`] may decide where the bilinear
+    /// transmission is 0 or 1 from the distance field.
+    binary: bool,
+    /// A bound on the slope of the distance field's bilinear interpolation (per normalised
+    /// unit), from its largest differences between neighbouring texels along each axis.
+    lipschitz: f32,
 }
 
 /// Checks a mask size: both sides positive, at most [`MAX_MASK_TEXELS`] texels; the texel
@@ -117,11 +124,16 @@ impl ApertureMask {
 
     fn build(width: usize, height: usize, data: Vec<f32>) -> Self {
         let distance = distance_field(width, height, &data);
+        let (tu, tv) = (2.0 / width as f64, 2.0 / height as f64);
+        let binary = tu.max(tv) <= 2.0 * tu.min(tv) && data.iter().all(|&t| t == 0.0 || t == 1.0);
+        let lipschitz = field_slope(width, height, &distance, tu, tv);
         ApertureMask {
             width,
             height,
             data,
             distance,
+            binary,
+            lipschitz,
         }
     }
 
@@ -144,6 +156,19 @@ impl ApertureMask {
     /// inside), row-major like [`Self::data`]: the field [`Self::signed_distance`] interpolates.
     pub fn distance_field(&self) -> &[f32] {
         &self.distance
+    }
+
+    /// Every texel is 0 or 1 (and the texels are at most twice as wide as tall, or tall as
+    /// wide): what [`Self::uniform_around`] needs to decide for a feather of a texel or less.
+    pub fn is_binary(&self) -> bool {
+        self.binary
+    }
+
+    /// A bound on the slope of [`Self::signed_distance`]'s bilinear interpolation (per
+    /// normalised unit); [`Self::uniform_around`] adds 1 for the distance beyond the
+    /// outermost texel centres.
+    pub fn field_slope(&self) -> f32 {
+        self.lipschitz
     }
 
     /// A texel's width and height in normalised units (`2/width`, `2/height`).
@@ -171,6 +196,69 @@ impl ApertureMask {
         self.bilinear(&self.distance, uc, vc) + beyond
     }
 
+    /// Where [`crate::aperture::ApertureSampler::transmission_soft`] of this mask is the same
+    /// at every point within `radius` of `(u, v)`: `Some(1.0)` wholly open, `Some(0.0)` wholly
+    /// closed, `None` where it may vary (or this cannot tell). Conservative, from the distance
+    /// field at `(u, v)` alone:
+    ///
+    /// - a feather of at most a texel gives the bilinear transmission, which is 1 (or 0)
+    ///   where every texel centre it blends is open (closed) and the mask is binary; the
+    ///   field at `(u, v)` is within a texel diagonal of the distance to the nearest texel
+    ///   centre on the other side, so `|d| ≥ 2 radius + 4 texels` leaves every centre within
+    ///   `radius` plus a diagonal on one side;
+    /// - a wider feather ramps on the field, whose slope is at most `lipschitz + 1` (the
+    ///   interpolation's, plus the distance added beyond the outermost centres): wholly open
+    ///   where `d + (lipschitz + 1) radius ≤ −feather/2`, closed where
+    ///   `d − (lipschitz + 1) radius ≥ feather/2`.
+    pub fn uniform_around(&self, u: f32, v: f32, radius: f32, feather: f32) -> Option<f32> {
+        let d = f64::from(self.signed_distance(u, v));
+        let (tu, tv) = self.texel_size();
+        let (r, f) = (f64::from(radius), f64::from(feather));
+        let margin = if feather <= tu.max(tv) {
+            if !self.binary {
+                return None;
+            }
+            2.0 * r + 4.0 * f64::from(tu.max(tv))
+        } else {
+            (f64::from(self.lipschitz) + 1.0) * r + 0.5 * f
+        };
+        // A little more for the roundings of f32 positions and distances.
+        let margin = margin + UNIFORM_SLACK;
+        if d <= -margin {
+            Some(1.0)
+        } else if d >= margin {
+            Some(0.0)
+        } else {
+            None
+        }
+    }
+
+    /// The soft transmission at `(u, v)` (as `ApertureSampler::transmission_soft`, `feather`
+    /// positive) and a distance within which it is the same: [`Self::uniform_around`]'s
+    /// margins solved for the radius (0 where they leave none).
+    pub fn transmission_reach(&self, u: f32, v: f32, feather: f32) -> (f32, f32) {
+        let (tu, tv) = self.texel_size();
+        let d = f64::from(self.signed_distance(u, v));
+        let (t, reach) = if feather <= tu.max(tv) {
+            let t = self.transmission(u, v);
+            // Over max(2, slope): within it of (u, v), the field keeps the margin
+            // `uniform_around` asks there.
+            let reach = if self.binary {
+                (d.abs() - 4.0 * f64::from(tu.max(tv)) - UNIFORM_SLACK)
+                    / (f64::from(self.lipschitz) + 1.0).max(2.0)
+            } else {
+                0.0
+            };
+            (t, reach)
+        } else {
+            let f = f64::from(feather);
+            let t = super::smooth_edge(d, f) as f32;
+            let reach = (d.abs() - 0.5 * f - UNIFORM_SLACK) / (f64::from(self.lipschitz) + 1.0);
+            (t, reach)
+        };
+        (t, if reach > 0.0 { reach as f32 } else { 0.0 })
+    }
+
     /// `Σ T × texel area`: the exact integral of the bilinear transmission (module docs).
     pub fn open_area(&self) -> f64 {
         let sum: f64 = self.data.iter().map(|&t| f64::from(t)).sum();
@@ -186,6 +274,28 @@ impl ApertureMask {
         let bottom = at(j1, i0) + fx * (at(j1, i1) - at(j1, i0));
         (top + fy * (bottom - top)) as f32
     }
+}
+
+/// Normalised units added to [`ApertureMask::uniform_around`]'s margins for roundings.
+const UNIFORM_SLACK: f64 = 1e-5;
+
+/// A bound on the slope of the bilinear interpolation of `field` (texels `tu` × `tv`): the
+/// hypotenuse of its largest differences between neighbours along each axis over the
+/// spacing (within a cell each partial derivative is a blend of two such differences).
+fn field_slope(width: usize, height: usize, field: &[f32], tu: f64, tv: f64) -> f32 {
+    let (mut gu, mut gv) = (0.0_f64, 0.0_f64);
+    for row in 0..height {
+        for col in 0..width {
+            let d = f64::from(field[row * width + col]);
+            if col + 1 < width {
+                gu = gu.max((f64::from(field[row * width + col + 1]) - d).abs() / tu);
+            }
+            if row + 1 < height {
+                gv = gv.max((f64::from(field[(row + 1) * width + col]) - d).abs() / tv);
+            }
+        }
+    }
+    gu.hypot(gv) as f32
 }
 
 /// For a position `p` in 0..=2 along an axis of `n` texels: the two texels to blend and the

@@ -459,3 +459,66 @@ fn closed_and_fully_open_masks_sample_without_trouble() {
     assert!((open.signed_distance(0.0, 0.0) + 1.0).abs() < texel);
     assert!((open.signed_distance(1.5, 0.0) - 0.5).abs() < texel);
 }
+
+// ---- uniform around a point ----
+
+/// `uniform_around`'s answer checked on a dense sample of the disc it speaks for: where it
+/// says open (closed), the soft transmission is 1 (0) at every sample; returns how often it
+/// answered.
+fn check_uniform(aperture: &Aperture, feather: f32, seed: u64) -> usize {
+    let sampler = aperture.sampler();
+    let mut state = seed;
+    let mut unit = || {
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (state >> 40) as f32 / (1u64 << 24) as f32
+    };
+    let mut answered = 0;
+    for _ in 0..3000 {
+        let (u, v) = (2.4 * unit() - 1.2, 2.4 * unit() - 1.2);
+        let radius = 0.1 * unit() * unit();
+        let Some(t) = sampler.uniform_around(u, v, radius, feather) else {
+            continue;
+        };
+        answered += 1;
+        for k in 0..200 {
+            // Rings out to the whole radius, the rim included.
+            let r = radius * ((k % 10) as f32 + 1.0) / 10.0;
+            let a = k as f32 * 0.7;
+            let (x, y) = (u + r * a.cos(), v + r * a.sin());
+            let s = sampler.transmission_soft(x, y, feather);
+            assert_eq!(
+                s, t,
+                "{aperture:?} feather {feather}: ({u}, {v}) r {radius} said {t}, ({x}, {y}) has {s}"
+            );
+        }
+    }
+    answered
+}
+
+#[test]
+fn uniform_around_is_never_wrong() {
+    for feather in [1e-3_f32, 0.01, 0.05] {
+        assert!(check_uniform(&Aperture::Circular, feather, 1) > 1000);
+        assert!(check_uniform(&iris(6, 0.3, 0.2), feather, 2) > 1000);
+        assert!(check_uniform(&iris(5, 0.0, 0.0), feather, 3) > 1000);
+        // A binary mask (a hard circle) and a grey one; feathers below and above a texel.
+        let hard = Aperture::Mask(hard_circle(64));
+        assert!(check_uniform(&hard, feather, 4) > 500, "{feather}");
+        let grey = Aperture::Circular.rasterize(64, 64).unwrap();
+        let answered = check_uniform(&Aperture::Mask(grey), feather, 5);
+        let texel = 2.0 / 64.0;
+        // A grey mask sampled bilinearly (feather under a texel) cannot be decided.
+        assert!(
+            (feather <= texel) == (answered == 0),
+            "{feather}: {answered}"
+        );
+    }
+    // No answer without a positive feather.
+    let s = Aperture::Circular.sampler();
+    assert_eq!(s.uniform_around(0.0, 0.0, 0.1, 0.0), None);
+    assert_eq!(s.uniform_around(0.0, 0.0, f32::NAN, 0.01), None);
+    assert_eq!(s.uniform_around(0.0, 0.0, 0.1, 0.01), Some(1.0));
+    assert_eq!(s.uniform_around(2.0, 0.0, 0.1, 0.01), Some(0.0));
+}

@@ -28,13 +28,24 @@
 //! stop is grazed, the exact smoothsteps are summed over [`CORNER_STEPS`] steps of `τ`. Inside
 //! the ghost this is one shade instead of one per band.
 //!
+//! An iris or a mask has no parabola in `τ`: on its outline ([`APERTURE_FLAG`]) the pixel's
+//! stop crossing `(u, v)(τ)` — a segment, as each band's crossing is where the circle's is — is
+//! stepped over `τ` in [`CORNER_STEPS`] steps, each taking the clip's smoothstep times the
+//! aperture's soft transmission there (the band-by-band edge shade, with the same feather)
+//! times the step's share of the colour. Where the aperture's transmission is known to be 0
+//! or 1 all along the segment ([`crate::aperture::ApertureSampler::uniform_around`]), the pixel
+//! is dark or takes the clip's share alone; steps within a known transmission's reach are not
+//! evaluated, and a row's pixels closed at its ends or open in its middle are found by tracing
+//! the segments' middles along it ([`FringeShader::split_row`]). A triangle closed all over
+//! its stop crossings is not drawn.
+//!
 //! A triangle is drawn band by band as before (`BandTriangles::push` in [`super::triangles`]) where
 //! the model does not hold: a ray of some band stopped, the bands' triangles differ in
 //! orientation or by more than [`MAX_AREA_RATIO`] in area (a fold, a caustic), or, on an edge,
 //! a band's value departs from the line by more than a quarter of the feather — and the whole
 //! ghost is, when more than [`MAX_FAILED_SHARE`] of its triangles do not hold.
 
-use crate::aperture::Aperture;
+use crate::aperture::{Aperture, ApertureSampler};
 use crate::raster::{RowSplit, Shader};
 
 use super::context::{BandRef, GhostContext, GhostGrid, GhostStats};
@@ -48,9 +59,17 @@ use super::triangles::{BandTriangles, grid_triangles, trace_band};
 
 /// Attributes of a fringed triangle's corner: summed RGB irradiance, the clip radius at
 /// `τ = 0` and its change over `τ ∈ [0, 1]`, likewise the stop crossing's `u` and `v`, the
-/// feather width, 1 where the circular stop must be evaluated, and the index of the ghost's
-/// [`FringeTable`] in [`GhostMesh::fringe_tables`].
+/// feather width, the stop flag — 0 where the aperture is not evaluated, 1 where the circular
+/// stop is (analytically), 2 where another aperture is ([`FringeShader::aperture`], stepped
+/// over `τ`: [`APERTURE_FLAG`]) — and the index of the ghost's [`FringeTable`] in
+/// [`GhostMesh::fringe_tables`].
 pub type FringeAttrs = [f32; 12];
+
+/// The stop flag (attribute 10) of a fringed triangle on the outline of an aperture other
+/// than the circle: the shader takes the aperture's soft transmission at the stop crossing
+/// `(u, v)(τ)` in [`CORNER_STEPS`] steps of `τ` (a stepped path of the crossing over the
+/// group's wavelengths), where the circle's open interval is found analytically.
+pub const APERTURE_FLAG: f32 = 2.0;
 
 /// Largest ratio between the areas of a grid triangle's images in two bands for which the
 /// triangle is drawn once: beyond it the cell folds or focuses (a caustic) and is drawn band
@@ -78,8 +97,15 @@ const WIDE_RAMP: f32 = 0.25;
 pub const MAX_SAG: f32 = 0.01;
 
 /// Steps over `τ` where the clip's and the stop's ends meet in the range, where the stop is
-/// grazed, or where an end's ramp is wide.
+/// grazed, or where an end's ramp is wide; and over the whole range where another aperture's
+/// outline is drawn ([`APERTURE_FLAG`]).
 pub const CORNER_STEPS: usize = 16;
+
+/// Normalised stop units kept between a row's pixels found dark or open by the aperture
+/// ([`FringeShader::split_row`] on [`APERTURE_FLAG`] triangles) and the aperture's outline,
+/// for the f32 rounding of the pixels' attributes along the row (far above it: a feather is
+/// at least 1e-4).
+const APERTURE_SPLIT_MARGIN: f64 = 1e-5;
 
 /// A linear ramp of the open share over `τ`: 0 at `closed`, 1 at `open`.
 #[derive(Clone, Copy, Debug)]
@@ -95,8 +121,10 @@ pub struct FringeRows {
     bounds: [f64; 2],
     /// `1 /` the step along x of the clip radius at either end of τ.
     inv_radius_step: [f64; 2],
-    /// The stop's outline is drawn (flagged).
+    /// The circular stop's outline is drawn (flagged 1).
     stop: bool,
+    /// Another aperture's outline is drawn ([`APERTURE_FLAG`]): no pixel is wholly open.
+    aperture: bool,
     /// Half the longest segment of the stop crossing over τ, of the triangle's corners.
     reach: f64,
     /// The step along x of the segment's middle, and the norms of that step and of its
@@ -110,9 +138,75 @@ pub struct FringeRows {
 #[derive(Debug)]
 pub struct FringeShader<'a> {
     pub tables: &'a [FringeTable],
+    /// The aperture of triangles flagged [`APERTURE_FLAG`] (the frame's; for the circle,
+    /// whose triangles are flagged 1, unused: [`crate::aperture::CIRCLE_SAMPLER`]).
+    pub aperture: ApertureSampler<'a>,
 }
 
 impl FringeShader<'_> {
+    /// The open share of a triangle flagged [`APERTURE_FLAG`]: where the aperture's soft
+    /// transmission is 1 along the pixel's whole segment of stop crossings over `τ` (from
+    /// its middle, [`ApertureSampler::uniform_around`] within half its length), the clip's
+    /// share alone; 0 where it is 0 there; otherwise the clip's smoothstep times the
+    /// aperture's transmission summed over [`CORNER_STEPS`] steps of `τ`.
+    fn aperture_share(&self, a: &FringeAttrs) -> [f32; 3] {
+        let (mu, mv) = (a[5] + 0.5 * a[6], a[7] + 0.5 * a[8]);
+        let half = 0.5 * (a[6] * a[6] + a[8] * a[8]).sqrt();
+        match self.aperture.uniform_around(mu, mv, half, a[9]) {
+            Some(0.0) => [0.0; 3],
+            Some(_) => {
+                let mut clip = *a;
+                clip[10] = 0.0;
+                self.open_share(&clip)
+            }
+            None => self.aperture_stepped(a, CORNER_STEPS),
+        }
+    }
+
+    /// [`FringeShader::stepped_share`] of a triangle flagged [`APERTURE_FLAG`], the same sum
+    /// with fewer evaluations of the aperture: a step whose clip is closed needs none, and
+    /// where the aperture's transmission is known to be 0 or 1 within some distance
+    /// ([`ApertureSampler::transmission_reach`]) the steps of the stop crossing inside it take
+    /// that value (consecutive steps are `|(u1, v1)| / steps` apart).
+    fn aperture_stepped(&self, a: &FringeAttrs, steps: usize) -> [f32; 3] {
+        let f = a[9];
+        let table = &self.tables[a[11] as usize];
+        let width = 1.0 / steps as f32;
+        let step_len = (a[6] * a[6] + a[8] * a[8]).sqrt() * width;
+        let mut prev = table.share(0.0);
+        let mut acc = [0.0_f32; 3];
+        // Steps before `known_until` have transmission `known`.
+        let (mut known_until, mut known) = (0_usize, 0.0_f32);
+        for i in 0..steps {
+            let next = table.share((i + 1) as f32 * width);
+            let t = (i as f32 + 0.5) * width;
+            let clip = smoothstep(1.0 + 0.5 * f, 1.0 - 0.5 * f, a[3] + t * a[4]);
+            if clip > 0.0 {
+                let transmission = if i < known_until {
+                    known
+                } else {
+                    let (u, v) = (a[5] + t * a[6], a[7] + t * a[8]);
+                    let (tr, reach) = self.aperture.transmission_reach(u, v, f);
+                    if reach > 0.0 {
+                        let ahead = if step_len > 0.0 {
+                            (reach / step_len).min(steps as f32) as usize
+                        } else {
+                            steps
+                        };
+                        (known_until, known) = (i + 1 + ahead, tr);
+                    }
+                    tr
+                };
+                let w = clip * transmission;
+                for c in 0..3 {
+                    acc[c] += w * (next[c] - prev[c]);
+                }
+            }
+            prev = next;
+        }
+        acc
+    }
+
     /// The open share summed over `steps` even steps of `τ`: at each step's middle the
     /// feather's own smoothstep of the clip radius and (where flagged) of the stop's exact
     /// radius, times the step's share of the colour. With many steps, the tests' oracle.
@@ -130,7 +224,10 @@ impl FringeShader<'_> {
         let table = &self.tables[a[11] as usize];
         let weight = |t: f32| {
             let mut w = smoothstep(1.0 + 0.5 * f, 1.0 - 0.5 * f, a[3] + t * a[4]);
-            if a[10] > 0.5 {
+            if a[10] > 1.5 {
+                let (u, v) = (a[5] + t * a[6], a[7] + t * a[8]);
+                w *= self.aperture.transmission_soft(u, v, f);
+            } else if a[10] > 0.5 {
                 let (u, v) = (a[5] + t * a[6], a[7] + t * a[8]);
                 w *= smoothstep(1.0 + 0.5 * f, 1.0 - 0.5 * f, (u * u + v * v).sqrt());
             }
@@ -165,6 +262,9 @@ impl FringeShader<'_> {
     /// flagged).
     #[inline]
     fn open_share(&self, a: &FringeAttrs) -> [f32; 3] {
+        if a[10] > 1.5 {
+            return self.aperture_share(a);
+        }
         let full = a[9];
         // Where a value does not move with τ, the feather's own smoothstep; where it does, a
         // linear ramp over τ as wide as the smoothstep's spread: the same mean and variance
@@ -367,7 +467,8 @@ impl Shader<12> for FringeShader<'_> {
         FringeRows {
             bounds: [1.0 + 0.5 * f + SPLIT_MARGIN, 1.0 - 0.5 * f - SPLIT_MARGIN],
             inv_radius_step: [1.0 / d0, 1.0 / d1],
-            stop: a[10] > 0.5,
+            stop: a[10] > 0.5 && a[10] <= 1.5,
+            aperture: a[10] > 1.5,
             reach: corners.iter().map(half).fold(0.0, f64::max),
             middle_step: [dmu, dmv],
             stop_steps: [
@@ -418,6 +519,9 @@ impl Shader<12> for FringeShader<'_> {
             lit = intersect(lit, within);
         }
         let mut core = core0.start.max(core1.start)..core0.end.min(core1.end);
+        if rows.aperture {
+            (lit, core) = self.aperture_split(rows, a, lit, core);
+        }
         if rows.stop && !core.is_empty() {
             // The stop, where both ends of τ's segment are inside it (the disc is convex):
             // each end's `u² + v²` is a parabola along the row.
@@ -458,13 +562,95 @@ impl Shader<12> for FringeShader<'_> {
     }
 }
 
+impl FringeShader<'_> {
+    /// A row of a triangle flagged [`APERTURE_FLAG`], `lit` and `core` as the clip leaves
+    /// them: the pixels at either end where the aperture is closed along every pixel's whole
+    /// segment of stop crossings are left dark, and the core is the longest run, from either
+    /// end of the clip's core, where it is open along them. Traced along the row from the
+    /// segments' middles, which step by `middle_step` a pixel: where the transmission is 0
+    /// (or 1) within `reach` of a middle, it is along the segments of the pixels whose middle
+    /// lies within `reach` less the longest half segment ([`FringeRows::reach`]) of it.
+    fn aperture_split(
+        &self,
+        rows: &FringeRows,
+        a: &FringeAttrs,
+        lit: std::ops::Range<usize>,
+        core: std::ops::Range<usize>,
+    ) -> (std::ops::Range<usize>, std::ops::Range<usize>) {
+        if lit.is_empty() {
+            return (lit, 0..0);
+        }
+        let (mu, mv) = (
+            f64::from(a[5]) + 0.5 * f64::from(a[6]),
+            f64::from(a[7]) + 0.5 * f64::from(a[8]),
+        );
+        let [dmu, dmv] = rows.middle_step;
+        let step = dmu.hypot(dmv);
+        let margin = rows.reach + APERTURE_SPLIT_MARGIN;
+        // How many pixels from `k` on (either way) have the transmission `want` all along
+        // their segments: 0 when `k` has not.
+        let run = |k: usize, want: f32| -> usize {
+            let (u, v) = (mu + k as f64 * dmu, mv + k as f64 * dmv);
+            let (t, reach) = self.aperture.transmission_reach(u as f32, v as f32, a[9]);
+            let reach = f64::from(reach);
+            #[allow(clippy::float_cmp, reason = "a known transmission is 0 or 1 exactly")]
+            if t != want || reach <= margin {
+                0
+            } else if step > 0.0 {
+                ((reach - margin) / step).min(1e9) as usize + 1
+            } else {
+                usize::MAX
+            }
+        };
+        let (mut start, mut end) = (lit.start, lit.end);
+        while start < end {
+            match run(start, 0.0) {
+                0 => break,
+                r => start = start.saturating_add(r).min(end),
+            }
+        }
+        while end > start {
+            match run(end - 1, 0.0) {
+                0 => break,
+                r => end = end.saturating_sub(r).max(start),
+            }
+        }
+        let lit = start..end;
+        let core = intersect(core, lit.clone());
+        if core.is_empty() {
+            return (lit, 0..0);
+        }
+        let mut forward = core.start;
+        while forward < core.end {
+            match run(forward, 1.0) {
+                0 => break,
+                r => forward = forward.saturating_add(r).min(core.end),
+            }
+        }
+        let mut backward = core.end;
+        while backward > core.start {
+            match run(backward - 1, 1.0) {
+                0 => break,
+                r => backward = backward.saturating_sub(r).max(core.start),
+            }
+        }
+        let core = if forward - core.start >= core.end - backward {
+            core.start..forward
+        } else {
+            backward..core.end
+        };
+        (lit, core)
+    }
+}
+
 /// Traces `ghost` at every band of `bands` (at least two, over the bins whose edges in
 /// wavelength are `edges_nm`, one more than the bands) and appends one triangle per grid
 /// triangle where the bands' images follow the fringe model, and one per band elsewhere
 /// (`BandTriangles::push` in [`super::triangles`]) — for the whole ghost when that is more than
-/// [`MAX_FAILED_SHARE`] of its triangles. Only for the circular stop: another aperture
-/// (or fewer than two bands, or a colour whose channels cannot be split) is meshed band by
-/// band.
+/// [`MAX_FAILED_SHARE`] of its triangles. Any aperture: the circle's outline is shaded
+/// analytically (stop flag 1), an iris's or a mask's by its transmission stepped over `τ`
+/// ([`APERTURE_FLAG`]). Fewer than two bands, or a colour whose channels cannot be split, is
+/// meshed band by band.
 pub fn mesh_ghost_fringed(
     ctx: &GhostContext<'_>,
     ghost: &GhostGrid<'_>,
@@ -501,7 +687,7 @@ pub fn mesh_ghost_fringed(
             emit.push(tri, mesh, stats);
         }
     };
-    let table = (edges_nm.len() == m + 1 && m >= 2 && matches!(ctx.aperture, Aperture::Circular))
+    let table = (edges_nm.len() == m + 1 && m >= 2)
         .then(|| ghost_table(bands, edges_nm, &emits, n))
         .flatten();
     let Some((table, centres)) = table else {
@@ -512,7 +698,8 @@ pub fn mesh_ghost_fringed(
     };
     let id = mesh.fringe_tables.len() as f32;
     mesh.fringe_tables.push(table);
-    let mut fringer = Fringer::new(&emits, &centres, n, id);
+    let circle = matches!(ctx.aperture, Aperture::Circular);
+    let mut fringer = Fringer::new(&emits, &centres, n, id, (circle, &sampler));
     let (o0, e0, f0) = (mesh.open.len(), mesh.edge.len(), mesh.fringe.len());
     let mut failed = 0_usize;
     for tri in grid_triangles(n) {
@@ -598,6 +785,12 @@ enum Fringed {
 /// buffers a triangle's test reuses (made once per ghost).
 struct Fringer<'e, 'a> {
     emits: &'e [BandTriangles<'a>],
+    /// The aperture is the circle (its outline flagged 1, else [`APERTURE_FLAG`]).
+    circle: bool,
+    /// A convex aperture's open part is decided at the stop crossings' ends (the circle's,
+    /// the iris's), a mask's around them ([`ApertureSampler::uniform_around`]).
+    convex: bool,
+    sampler: &'e ApertureSampler<'e>,
     model: LineFit<'e>,
     /// Index of the ghost's table in [`GhostMesh::fringe_tables`].
     id: f32,
@@ -620,7 +813,13 @@ struct Fringer<'e, 'a> {
 }
 
 impl<'e, 'a> Fringer<'e, 'a> {
-    fn new(emits: &'e [BandTriangles<'a>], centres: &'e [f64], n: usize, id: f32) -> Self {
+    fn new(
+        emits: &'e [BandTriangles<'a>],
+        centres: &'e [f64],
+        n: usize,
+        id: f32,
+        (circle, sampler): (bool, &'e ApertureSampler<'e>),
+    ) -> Self {
         let m = emits.len();
         let feather = emits[0].feather;
         let vertices = n * n;
@@ -639,6 +838,9 @@ impl<'e, 'a> Fringer<'e, 'a> {
         }
         Fringer {
             emits,
+            circle,
+            convex: sampler.is_convex(),
+            sampler,
             model: LineFit::new(centres),
             id,
             feather,
@@ -700,12 +902,43 @@ impl<'e, 'a> Fringer<'e, 'a> {
         let radius_open = lines
             .iter()
             .all(|l| end(l[0], 0.0) <= inner && end(l[0], 1.0) <= inner);
-        let stop_open = lines.iter().all(|l| {
-            [0.0, 1.0].iter().all(|&t| {
-                let uv = [end(l[1], t) as f32, end(l[2], t) as f32];
-                emits[0].inside_aperture(uv)
+        let inside_at_ends = || {
+            lines.iter().all(|l| {
+                [0.0, 1.0].iter().all(|&t| {
+                    let uv = [end(l[1], t) as f32, end(l[2], t) as f32];
+                    emits[0].inside_aperture(uv)
+                })
             })
-        });
+        };
+        let (stop_open, stop_closed) = if self.circle {
+            (inside_at_ends(), false)
+        } else {
+            // Every pixel's stop crossings over τ lie in the hull of the corners' ends (they
+            // are affine in the pixel's position and in τ), taken here as the disc about
+            // their centroid through the farthest: where the aperture is closed all over it,
+            // nothing to draw; open all over it, no outline (a convex aperture is open over
+            // the hull already where it is at its ends).
+            let ends: [[f64; 2]; 6] = std::array::from_fn(|k| {
+                let (l, t) = (&lines[k / 2], (k % 2) as f64);
+                [end(l[1], t), end(l[2], t)]
+            });
+            let c = ends
+                .iter()
+                .fold([0.0; 2], |c, p| [c[0] + p[0] / 6.0, c[1] + p[1] / 6.0]);
+            let radius = ends
+                .iter()
+                .map(|p| (p[0] - c[0]).hypot(p[1] - c[1]))
+                .fold(0.0_f64, f64::max);
+            let uniform =
+                self.sampler
+                    .uniform_around(c[0] as f32, c[1] as f32, radius as f32, feather);
+            let open = if self.convex {
+                inside_at_ends()
+            } else {
+                uniform == Some(1.0)
+            };
+            (open, uniform == Some(0.0))
+        };
         // Where an edge crosses the triangle, the bands' values there must follow their lines
         // (the stop's only where its outline is drawn); inside, the mean triangle is all.
         let open = radius_open && stop_open;
@@ -716,12 +949,23 @@ impl<'e, 'a> Fringer<'e, 'a> {
         }
         let (flux, colours) = self.colours(tri);
         stats.flux += flux;
+        if stop_closed {
+            // Behind the aperture at every pixel and band: its light counted (as band by
+            // band), nothing drawn.
+            return Fringed::Drawn;
+        }
         stats.triangles += 1;
         let pixels = mean.map(|q| emits[0].to_pixel(q));
         if open {
             mesh.open.push(pixels, colours);
         } else {
-            let flag = if stop_open { 0.0 } else { 1.0 };
+            let flag = if stop_open {
+                0.0
+            } else if self.circle {
+                1.0
+            } else {
+                APERTURE_FLAG
+            };
             let id = self.id;
             let corner = |c: usize| -> FringeAttrs {
                 let [r, u, v] = lines[c];
@@ -898,6 +1142,13 @@ mod tests {
     use crate::image::HdrImage;
     use crate::raster::{Coverage, rasterize_shaded_into};
 
+    /// The iris the tests shade [`APERTURE_FLAG`] triangles with.
+    static IRIS: Aperture = Aperture::Iris {
+        blades: 6,
+        rotation_rad: 0.3,
+        roundness: 0.2,
+    };
+
     /// Five bins of unequal spans and colours (one channel negative in a bin, as a narrow
     /// band's linear sRGB can be).
     fn table() -> FringeTable {
@@ -959,7 +1210,10 @@ mod tests {
     #[test]
     fn a_fringed_edge_keeps_each_colour_s_light() {
         let tables = [table()];
-        let shader = FringeShader { tables: &tables };
+        let shader = FringeShader {
+            tables: &tables,
+            aperture: crate::aperture::CIRCLE_SAMPLER,
+        };
         let t = &tables[0];
         // The colour's mean τ per channel: ∫ τ dF = 1 − ∫₀¹ F.
         let integral = t.integral(1.0);
@@ -1031,7 +1285,7 @@ mod tests {
             f in 0.02_f32..0.05,
         ) {
             let tables = [table()];
-            let shader = FringeShader { tables: &tables };
+            let shader = FringeShader { tables: &tables, aperture: crate::aperture::CIRCLE_SAMPLER };
             let r1 = if sign { r1 } else { -r1 };
             let a = attrs([1.0; 3], [r0, r1], [0.0; 2], [0.0; 2], f, false);
             let (s, q) = (shader.open_share(&a), shader.stepped_share(&a, 4096));
@@ -1052,11 +1306,43 @@ mod tests {
             flag in prop::bool::ANY,
         ) {
             let tables = [table()];
-            let shader = FringeShader { tables: &tables };
+            let shader = FringeShader { tables: &tables, aperture: crate::aperture::CIRCLE_SAMPLER };
             let a = attrs([1.0; 3], [r0, r1], [u0, u1], [v0, v1], f, flag);
             let (s, q) = (shader.open_share(&a), shader.stepped_share(&a, 256));
             for c in 0..3 {
                 prop_assert!((s[c] - q[c]).abs() < 0.03, "channel {}: {:?} against {:?}", c, s, q);
+            }
+        }
+
+        /// An iris's outline ([`APERTURE_FLAG`]) stepped over τ against quadrature over 4096
+        /// steps: within a step's share of the colour (the edge of a band falls on the
+        /// nearest of [`CORNER_STEPS`] steps), exactly the clip's share where the iris is
+        /// open along the whole segment, 0 where it is closed.
+        #[test]
+        fn an_iris_outline_follows_the_bands(
+            r0 in 0.9_f32..1.1, r1 in -0.1_f32..0.1,
+            u0 in -1.1_f32..1.1, u1 in -0.1_f32..0.1,
+            v0 in -1.1_f32..1.1, v1 in -0.1_f32..0.1,
+            f in 0.002_f32..0.05,
+        ) {
+            let tables = [table()];
+            let shader = FringeShader { tables: &tables, aperture: IRIS.sampler() };
+            let mut a = attrs([1.0; 3], [r0, r1], [u0, u1], [v0, v1], f, true);
+            a[10] = APERTURE_FLAG;
+            let (s, q) = (shader.open_share(&a), shader.stepped_share(&a, 4096));
+            // The largest colour share of one step of τ, plus the clip's own approximation.
+            let step_share = (0..CORNER_STEPS)
+                .map(|i| {
+                    let (lo, hi) = (i as f32 / CORNER_STEPS as f32, (i + 1) as f32 / CORNER_STEPS as f32);
+                    let (p, n) = (tables[0].share(lo), tables[0].share(hi));
+                    (0..3).map(|c| n[c] - p[c]).fold(0.0_f32, f32::max)
+                })
+                .fold(0.0_f32, f32::max);
+            for c in 0..3 {
+                prop_assert!(
+                    (s[c] - q[c]).abs() < step_share + 0.03,
+                    "channel {}: {:?} against {:?}", c, s, q
+                );
             }
         }
 
@@ -1071,11 +1357,15 @@ mod tests {
             stop_step in prop::array::uniform4(-0.02_f32..0.02),
             f in 1e-4_f32..0.05,
             flag in prop::bool::ANY,
+            iris in prop::bool::ANY,
             n in 1_usize..64,
         ) {
             let tables = [table()];
-            let shader = FringeShader { tables: &tables };
-            let a = attrs(rgb, [r0, r1], [u0, u1], [v0, v1], f, flag);
+            let shader = FringeShader { tables: &tables, aperture: IRIS.sampler() };
+            let mut a = attrs(rgb, [r0, r1], [u0, u1], [v0, v1], f, flag);
+            if flag && iris {
+                a[10] = APERTURE_FLAG;
+            }
             let mut step = [0.0_f32; 12];
             step[0] = 0.01;
             step[3] = dr0;
@@ -1127,13 +1417,19 @@ mod tests {
             duv in prop::array::uniform3(prop::array::uniform2(-0.1_f32..0.1)),
             f in 1e-3_f32..0.05,
             flag in prop::bool::ANY,
+            iris in prop::bool::ANY,
             rgb in prop::array::uniform3(0.1_f32..10.0),
         ) {
             let tables = [table()];
             let corner_attrs: Vec<FringeAttrs> = (0..3)
                 .map(|k| {
                     let (u0, v0) = (uv[k][0], uv[k][1]);
-                    attrs(rgb, [r[k], dr[k]], [u0, duv[k][0]], [v0, duv[k][1]], f, flag)
+                    let mut a =
+                        attrs(rgb, [r[k], dr[k]], [u0, duv[k][0]], [v0, duv[k][1]], f, flag);
+                    if flag && iris {
+                        a[10] = APERTURE_FLAG;
+                    }
+                    a
                 })
                 .collect();
             let (w, h) = (150, 150);
@@ -1141,7 +1437,7 @@ mod tests {
                 let mut img = HdrImage::new(w, h);
                 let coverage = Coverage::Sampled { min_area: SAMPLED_MIN_AREA };
                 let tris = [[0, 1, 2]];
-                let shader = FringeShader { tables: &tables };
+                let shader = FringeShader { tables: &tables, aperture: IRIS.sampler() };
                 if split {
                     rasterize_shaded_into(
                         &mut img.pixels, w, &corners, &corner_attrs, &tris, coverage, &shader,

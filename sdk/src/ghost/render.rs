@@ -140,7 +140,7 @@ pub fn rasterize_ghost_mesh_with(
         };
         rasterize_edges(pixels, width, &mesh.edge, coverage, &shader);
     }
-    // Made for the circular stop only (`super::fringe`).
+    // The circle's outline analytically, another aperture's stepped over τ (`super::fringe`).
     if !mesh.fringe.is_empty() {
         let fringe = &mesh.fringe;
         rasterize_shaded_into(
@@ -152,6 +152,7 @@ pub fn rasterize_ghost_mesh_with(
             coverage,
             &FringeShader {
                 tables: &mesh.fringe_tables,
+                aperture: aperture.sampler(),
             },
         );
     }

@@ -148,6 +148,23 @@ impl<'a> BandTriangles<'a> {
         self.convex && self.aperture.signed_distance(uv[0], uv[1]) <= -0.5 * self.feather
     }
 
+    /// True when the aperture is open (its soft transmission 1) all over the triangle of stop
+    /// crossings `uv` (within the disc about its centroid through its farthest corner).
+    #[inline]
+    fn open_around(&self, uv: [[f32; 2]; 3]) -> bool {
+        let c = [
+            (uv[0][0] + uv[1][0] + uv[2][0]) / 3.0,
+            (uv[0][1] + uv[1][1] + uv[2][1]) / 3.0,
+        ];
+        let radius = uv
+            .iter()
+            .map(|p| (p[0] - c[0]).hypot(p[1] - c[1]))
+            .fold(0.0_f32, f32::max);
+        self.aperture
+            .uniform_around(c[0], c[1], radius, self.feather)
+            == Some(1.0)
+    }
+
     /// Adds grid triangle `tri` to `mesh` (wholly open, or on an edge) and counts it and its
     /// flux in `stats`; nothing when it adds nothing (a ray stopped, wholly clipped, not
     /// finite).
@@ -204,9 +221,14 @@ impl<'a> BandTriangles<'a> {
             [rgb[0] * e, rgb[1] * e, rgb[2] * e]
         };
         // Inside the clip radius, and (for a convex opening) inside the aperture, by half a
-        // feather at every corner — so everywhere inside.
+        // feather at every corner — so everywhere inside; for a mask, open all around the
+        // stop crossings' triangle (the disc about its centroid through its corners).
         let radius_open = tri.iter().all(|&k| g.max_rel[k] <= 1.0 - 0.5 * feather);
-        let aperture_open = tri.iter().all(|&k| self.inside_aperture(self.stop_uv(k)));
+        let aperture_open = if self.convex {
+            tri.iter().all(|&k| self.inside_aperture(self.stop_uv(k)))
+        } else {
+            radius_open && self.open_around(tri.map(|k| self.stop_uv(k)))
+        };
         if radius_open && aperture_open {
             mesh.open.push(pixels, tri.map(colour));
         } else {

@@ -2,12 +2,32 @@
 //! buffer ([`pack_tables`]) for `shaders/fringe.wgsl` ([`SHADER`]), the WGSL port of
 //! `flarebench_sdk::ghost::fringe::FringeShader::shade`.
 
+use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::ghost::fringe_table::FringeTable;
+
+use crate::uniforms::ApertureBlock;
 
 /// The fringe shader's WGSL: `fn fringe_shade(a: array<f32, 12>) -> vec3<f32>` and its
 /// helpers (all named `fringe_…`), reading [`pack_tables`]'s buffer at
-/// `@group(1) @binding(0)`; no entry point, to be concatenated into a module that has one.
+/// `@group(1) @binding(0)`; no entry point, to be concatenated into a module that has one,
+/// after [`APERTURE_SHADER`] (triangles flagged `APERTURE_FLAG` call it).
 pub const SHADER: &str = include_str!("shaders/fringe.wgsl");
+
+/// The aperture's WGSL (`aperture_soft`, `aperture_uniform_around` and their helpers), reading
+/// its block at `@group(0) @binding(4)` and a mask's fields at `@group(0) @binding(5)`
+/// ([`aperture_bindings`]).
+pub const APERTURE_SHADER: &str = include_str!("shaders/aperture.wgsl");
+
+/// What [`APERTURE_SHADER`] binds for `aperture`: its uniform block's bytes, and the mask's
+/// transmission then distance field (a single 0 without a mask).
+pub fn aperture_bindings(aperture: &Aperture) -> (Vec<u8>, Vec<f32>) {
+    let block = ApertureBlock::new(aperture);
+    let fields = match aperture {
+        Aperture::Mask(mask) => [mask.data(), mask.distance_field()].concat(),
+        _ => vec![0.0],
+    };
+    (bytemuck::bytes_of(&block).to_vec(), fields)
+}
 
 /// Intervals between a table's nodes, as `fringe.wgsl` has them (`FRINGE_NODES`).
 pub const NODES: usize = 64;

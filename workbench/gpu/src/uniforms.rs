@@ -34,7 +34,9 @@ pub struct ApertureBlock {
     pub blades: u32,
     pub mask_width: u32,
     pub mask_height: u32,
-    pub _pad: [u32; 3],
+    pub mask_binary: u32,
+    pub mask_slope: f32,
+    pub _pad: u32,
     pub rotation: f32,
     pub sector: f32,
     pub half_sector: f32,
@@ -77,6 +79,8 @@ impl ApertureBlock {
                 block.kind = 2;
                 block.mask_width = mask.width() as u32;
                 block.mask_height = mask.height() as u32;
+                block.mask_binary = u32::from(mask.is_binary());
+                block.mask_slope = mask.field_slope();
             }
         }
         block

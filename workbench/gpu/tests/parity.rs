@@ -7,6 +7,7 @@ use std::sync::{Arc, OnceLock};
 use flarebench_gpu::{AdapterChoice, GhostRenderer, GpuContext};
 use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::frame::Frame;
+use flarebench_sdk::ghost::fringe::APERTURE_FLAG;
 use flarebench_sdk::ghost::sink::FrameMeshes;
 use flarebench_sdk::image::HdrImage;
 use flarebench_test_support::load_lens;
@@ -108,20 +109,31 @@ fn olf_mask() -> Aperture {
     Aperture::Mask(mask)
 }
 
+/// Fringed groups through an aperture other than the circle: triangles flagged
+/// `APERTURE_FLAG`, whose outline the fringe shader steps over τ.
+fn has_aperture_fringes(recorded: &FrameMeshes) -> bool {
+    recorded
+        .meshes
+        .iter()
+        .any(|(_, m)| m.fringe.attrs.iter().any(|a| a[10] > APERTURE_FLAG - 0.5))
+}
+
 #[test]
 fn heliar_iris_and_mask() {
-    check(
-        "heliar iris",
-        &record("heliar-tronnier", &["8,60"], &iris(), true),
-    );
-    check(
-        "heliar mask",
-        &record("heliar-tronnier", &["8,60"], &olf_mask(), true),
-    );
+    for (name, aperture) in [("iris", iris()), ("mask", olf_mask())] {
+        let r = record("heliar-tronnier", &["8,60"], &aperture, false);
+        assert!(
+            has_aperture_fringes(&r),
+            "{name}: the frame has fringed outlines"
+        );
+        check(&format!("heliar {name}, fringed"), &r);
+        let r = record("heliar-tronnier", &["8,60"], &aperture, true);
+        check(&format!("heliar {name}, band by band"), &r);
+    }
 }
 
 /// The Nikon zoom's default frame (fringed groups, two lights), and with an iris and a mask
-/// (drawn band by band: the fringe model is the circle's).
+/// (fringed too, their outlines stepped over τ).
 #[test]
 fn nikon_two_lights_iris_and_mask() {
     let r = record(
@@ -132,9 +144,11 @@ fn nikon_two_lights_iris_and_mask() {
     );
     check("nikon circle, two lights, fringed", &r);
     let r = record("nikon-zoom-short", &["10,30"], &iris(), false);
-    check("nikon iris", &r);
+    assert!(has_aperture_fringes(&r), "nikon iris: fringed outlines");
+    check("nikon iris, fringed", &r);
     let r = record("nikon-zoom-short", &["10,30"], &olf_mask(), false);
-    check("nikon mask", &r);
+    assert!(has_aperture_fringes(&r), "nikon mask: fringed outlines");
+    check("nikon mask, fringed", &r);
 }
 
 /// Starbursts composited on the GPU from the patterns the CPU splats: two lights in the frame

@@ -12,9 +12,11 @@ struct ApertureParams {
     // Mask size in texels.
     mask_width: u32,
     mask_height: u32,
+    // 1 where every texel is 0 or 1 (ApertureMask::is_binary); the distance field's slope
+    // bound (ApertureMask::field_slope).
+    mask_binary: u32,
+    mask_slope: f32,
     _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
     // Iris constants (flarebench_sdk::aperture::iris::IrisGeometry).
     rotation: f32,
     sector: f32,
@@ -160,4 +162,43 @@ fn aperture_soft(u: f32, v: f32, feather: f32) -> f32 {
             return ap_smooth_edge(ap_mask_distance(u, v), feather);
         }
     }
+}
+
+// Where aperture_soft with `feather` is the same at every point within `radius` of (u, v): 1
+// wholly open, 0 wholly closed, −1 where it may vary (the CPU's
+// ApertureSampler::uniform_around: exact for the circle and the iris, conservative for a
+// mask).
+fn aperture_uniform_around(u: f32, v: f32, radius: f32, feather: f32) -> f32 {
+    if !(feather > 0.0) || !(radius >= 0.0) {
+        return -1.0;
+    }
+    var d = 0.0;
+    var margin = radius + 0.5 * feather + 1e-6;
+    switch aperture.kind {
+        case 0u: {
+            d = sqrt(u * u + v * v) - 1.0;
+        }
+        case 1u: {
+            d = ap_iris_distance(u, v);
+        }
+        default: {
+            d = ap_mask_distance(u, v);
+            let texel = max(2.0 / f32(aperture.mask_width), 2.0 / f32(aperture.mask_height));
+            if !(feather > texel) {
+                if aperture.mask_binary == 0u {
+                    return -1.0;
+                }
+                margin = 2.0 * radius + 4.0 * texel + 1e-5;
+            } else {
+                margin = (aperture.mask_slope + 1.0) * radius + 0.5 * feather + 1e-5;
+            }
+        }
+    }
+    if d <= -margin {
+        return 1.0;
+    }
+    if d >= margin {
+        return 0.0;
+    }
+    return -1.0;
 }

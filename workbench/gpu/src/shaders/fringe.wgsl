@@ -1,14 +1,17 @@
 // The fringe shader: a WGSL port of `FringeShader::shade` (flarebench_sdk::ghost::fringe),
 // the colour fringes of a dispersive ghost drawn once for all its bands. `fringe_shade(a)`
 // takes a pixel's 12 interpolated `FringeAttrs` (summed RGB irradiance; clip radius at τ = 0
-// and its change over τ ∈ [0, 1]; likewise the stop crossing's u and v; the feather; 1 where
-// the circular stop is evaluated; the index of the ghost's table) and returns its RGB: the
-// irradiance times, per channel, the share of the ghost's colour over the open interval of τ.
+// and its change over τ ∈ [0, 1]; likewise the stop crossing's u and v; the feather; the stop
+// flag, 1 where the circular stop is evaluated and 2 where another aperture is (its soft
+// transmission stepped over τ, `APERTURE_FLAG`); the index of the ghost's table) and returns
+// its RGB: the irradiance times, per channel, the share of the ghost's colour over the open
+// interval of τ.
 //
-// Meant to be concatenated into a shader module: no entry point; every global is prefixed
-// `fringe_`. It reads the ghosts' `FringeTable`s, packed by `flarebench_gpu::fringe::
-// pack_tables`, from group 1, binding 0: table k at `k * FRINGE_TABLE_STRIDE`, its node i
-// (τ = i / 64) at `+ 6 i` as `[F_r, F_g, F_b, H_r, H_g, H_b]` (share and its integral).
+// Meant to be concatenated into a shader module after aperture.wgsl (`aperture_soft`,
+// `aperture_uniform_around`): no entry point; every global is prefixed `fringe_`. It reads the
+// ghosts' `FringeTable`s, packed by `flarebench_gpu::fringe::pack_tables`, from group 1,
+// binding 0: table k at `k * FRINGE_TABLE_STRIDE`, its node i (τ = i / 64) at `+ 6 i` as
+// `[F_r, F_g, F_b, H_r, H_g, H_b]` (share and its integral).
 //
 // The CPU's f64 (the exact integral of a wide ramp's smoothstep, `smooth_share`, from the
 // colour's partial moments) is replaced by a sum over the table's intervals of the
@@ -37,7 +40,8 @@ const FRINGE_CORNER_STEPS: u32 = 16u;
 /// 3 an end is closed throughout τ, 4 the stop is grazed (stepped), 5 ends overlap
 /// (stepped between them), 6 a wide clip end (exact), 7 a wide stop end (exact), 8 a wide
 /// end otherwise (stepped), 9 ends apart (mean shares), 10 ends apart, nothing open, 11 no
-/// end in τ's range; plus 16 where the clip's value does not move with τ, 32 the stop's.
+/// end in τ's range, 12 another aperture closed all along the stop's segment, 13 another
+/// aperture stepped; plus 16 where the clip's value does not move with τ, 32 the stop's.
 var<private> fringe_branch: u32;
 
 /// Node i's share F of table `base` (offset of the table in `fringe_data`).
@@ -142,11 +146,13 @@ fn fringe_smoothstep(e0: f32, e1: f32, x: f32) -> f32 {
 }
 
 /// At τ = t, the feather's smoothstep of the clip radius and (where flagged) of the stop's
-/// exact radius.
+/// exact radius, or (flag 2) the aperture's soft transmission at the stop crossing.
 fn fringe_weight(a: array<f32, 12>, t: f32) -> f32 {
     let f = a[9];
     var w = fringe_smoothstep(1.0 + 0.5 * f, 1.0 - 0.5 * f, a[3] + t * a[4]);
-    if a[10] > 0.5 {
+    if a[10] > 1.5 {
+        w *= aperture_soft(a[5] + t * a[6], a[7] + t * a[8], f);
+    } else if a[10] > 0.5 {
         let u = a[5] + t * a[6];
         let v = a[7] + t * a[8];
         w *= fringe_smoothstep(1.0 + 0.5 * f, 1.0 - 0.5 * f, sqrt(u * u + v * v));
@@ -371,6 +377,25 @@ fn fringe_shade(a: array<f32, 12>) -> vec3<f32> {
     // below its integer) and clamped to the tables there are.
     let tables = max(arrayLength(&fringe_data) / FRINGE_TABLE_STRIDE, 1u);
     let index = min(u32(max(round(a[11]), 0.0)), tables - 1u);
-    let s = fringe_open_share(a, index * FRINGE_TABLE_STRIDE);
+    let base = index * FRINGE_TABLE_STRIDE;
+    var b = a;
+    if a[10] > 1.5 {
+        // `FringeShader::aperture_share`: the clip alone where the aperture is open along the
+        // pixel's whole segment of stop crossings, nothing where it is closed, else stepped.
+        let um = a[5] + 0.5 * a[6];
+        let vm = a[7] + 0.5 * a[8];
+        let half = 0.5 * sqrt(a[6] * a[6] + a[8] * a[8]);
+        let uniform = aperture_uniform_around(um, vm, half, a[9]);
+        if uniform == 0.0 {
+            fringe_branch = 12u;
+            return vec3<f32>(0.0);
+        }
+        if uniform < 0.0 {
+            fringe_branch = 13u;
+            return vec3<f32>(a[0], a[1], a[2]) * fringe_stepped_between(a, base, 0.0, 1.0);
+        }
+        b[10] = 0.0;
+    }
+    let s = fringe_open_share(b, base);
     return vec3<f32>(a[0], a[1], a[2]) * s;
 }
