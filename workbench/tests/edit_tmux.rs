@@ -52,6 +52,19 @@ impl Tmux {
         }
     }
 
+    /// Waits until the editor has quit (its session ended); panics with the pane after 20 s.
+    fn wait_until_ended(&self) {
+        let start = Instant::now();
+        while self.session_alive() {
+            assert!(
+                start.elapsed() < Duration::from_secs(20),
+                "the editor did not quit: {}",
+                self.pane()
+            );
+            std::thread::sleep(Duration::from_millis(100));
+        }
+    }
+
     fn session_alive(&self) -> bool {
         self.run(&["has-session", "-t", "e2e"]).status.success()
     }
@@ -111,14 +124,7 @@ fn edit_a_cell_save_and_quit_in_a_real_terminal() {
     tmux.keys(&["C-s"]);
     tmux.wait_for("saved ");
     tmux.keys(&["q"]);
-    let start = Instant::now();
-    while tmux.session_alive() {
-        assert!(
-            start.elapsed() < Duration::from_secs(20),
-            "the editor did not quit"
-        );
-        std::thread::sleep(Duration::from_millis(100));
-    }
+    tmux.wait_until_ended();
 
     let saved = read_lens(&path).unwrap().system;
     assert_eq!(saved.surfaces[1].thickness, 7.5);
@@ -256,15 +262,7 @@ fn edit_with_a_window_shows_each_edit_in_the_window() {
 
     // Quitting the editor closes the window and ends the process.
     tmux.keys(&[":", "q", "!", "Enter"]);
-    let start = Instant::now();
-    while tmux.session_alive() {
-        assert!(
-            start.elapsed() < Duration::from_secs(20),
-            "the editor did not quit: {}",
-            tmux.pane()
-        );
-        std::thread::sleep(Duration::from_millis(100));
-    }
+    tmux.wait_until_ended();
 }
 
 #[test]
@@ -315,14 +313,7 @@ fn a_render_panic_beside_the_editor_loses_no_edit() {
     tmux.keys(&["C-s"]);
     tmux.wait_for("saved ");
     tmux.keys(&["q"]);
-    let start = Instant::now();
-    while tmux.session_alive() {
-        assert!(
-            start.elapsed() < Duration::from_secs(20),
-            "the editor did not quit"
-        );
-        std::thread::sleep(Duration::from_millis(100));
-    }
+    tmux.wait_until_ended();
     let saved = read_lens(&path).unwrap().system;
     assert_eq!(saved.surfaces[1].thickness, 7.5);
 }
