@@ -4,7 +4,7 @@
 
 use std::sync::{Arc, OnceLock};
 
-use flarebench_gpu::{AdapterChoice, GhostRenderer, GpuContext};
+use flarebench_gpu::{AccumFormat, AdapterChoice, GhostRenderer, GpuContext};
 use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::frame::Frame;
 use flarebench_sdk::ghost::sink::FrameMeshes;
@@ -44,7 +44,7 @@ fn record(lens: &str, lights: &[&str], aperture: &Aperture, band_by_band: bool) 
 }
 
 fn gpu_image(recorded: &FrameMeshes) -> HdrImage {
-    let mut gpu = GhostRenderer::new(context());
+    let mut gpu = GhostRenderer::new(context(), AccumFormat::F32).unwrap();
     recorded.replay(&mut gpu);
     gpu.read_back().expect("the GPU frame")
 }
@@ -195,7 +195,7 @@ fn heliar_with_starbursts() {
         cpu.luminance_sum() > 2.0 * ghosts_only,
         "the starbursts dominate"
     );
-    let mut gpu = GhostRenderer::new(context());
+    let mut gpu = GhostRenderer::new(context(), AccumFormat::F32).unwrap();
     recorded.replay(&mut gpu);
     gpu.add_starbursts(&splats).unwrap();
     let img = gpu.read_back().unwrap();
