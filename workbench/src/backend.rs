@@ -164,15 +164,18 @@ impl GhostBackend {
             BackendChoice::Cpu => Ok(GhostBackend::cpu(None)),
             #[cfg(feature = "gpu")]
             BackendChoice::Gpu | BackendChoice::Auto => {
-                use flarebench_gpu::{AdapterChoice, GhostRenderer, GpuContext};
+                use flarebench_gpu::{AccumFormat, AdapterChoice, GhostRenderer, GpuContext};
                 let adapters = if choice == BackendChoice::Gpu {
                     AdapterChoice::Any
                 } else {
                     AdapterChoice::Hardware
                 };
-                match GpuContext::new(adapters) {
-                    Ok(ctx) => {
-                        let r = &ctx.report;
+                let opened = GpuContext::new(adapters).and_then(|ctx| {
+                    GhostRenderer::new(std::sync::Arc::new(ctx), AccumFormat::default())
+                });
+                match opened {
+                    Ok(renderer) => {
+                        let r = &renderer.context().report;
                         let report = BackendReport {
                             backend: "gpu".into(),
                             adapter: Some(r.name.clone()),
@@ -181,7 +184,6 @@ impl GhostBackend {
                             software_adapter: r.software,
                             ..BackendReport::default()
                         };
-                        let renderer = GhostRenderer::new(std::sync::Arc::new(ctx));
                         Ok(GhostBackend {
                             active: Active::Gpu(Box::new(renderer)),
                             report,

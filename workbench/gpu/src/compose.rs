@@ -8,6 +8,7 @@ use flarebench_sdk::frame::Frame;
 use flarebench_sdk::starburst::{SplatGeometry, StarburstPattern, StarburstSplat};
 
 use crate::buffers::GrowBuffer;
+use crate::targets::AccumFormat;
 use crate::uniforms::{BLOCK_STRIDE, strided};
 use crate::{GpuContext, GpuError};
 
@@ -122,7 +123,8 @@ pub(crate) fn pipeline(
 }
 
 impl Compositor {
-    pub fn new(device: &wgpu::Device) -> Compositor {
+    /// The passes, the starburst pass adding into linear targets of `format`.
+    pub fn new(device: &wgpu::Device, format: AccumFormat) -> Compositor {
         let splat_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("starburst"),
             entries: &layout_entries(wgpu::BindingType::Buffer {
@@ -144,7 +146,7 @@ impl Compositor {
             &splat_layout,
             include_str!("shaders/starburst.wgsl"),
             ("vs_splat", "fs_splat"),
-            crate::pipelines::additive_target(),
+            crate::pipelines::additive_target(format),
         );
         let tone = pipeline(
             device,
@@ -176,12 +178,14 @@ impl Compositor {
         }
     }
 
-    /// Adds `splats` to `output` (the frame's linear target); returns the bytes uploaded.
-    /// Patterns already on the GPU from an earlier frame are not uploaded again.
+    /// Adds `splats` to `output` (the frame's linear target, its values times `scale`, a power
+    /// of two); returns the bytes uploaded. Patterns already on the GPU from an earlier frame
+    /// are not uploaded again.
     pub fn add_starbursts(
         &mut self,
         ctx: &GpuContext,
         output: &wgpu::TextureView,
+        scale: f32,
         frame: &Frame,
         splats: &[StarburstSplat],
         timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
@@ -243,7 +247,7 @@ impl Compositor {
                 frame: [w as f32, h as f32],
                 size: g.size as u32,
                 offset: offset as u32,
-                flux: s.flux as f32,
+                flux: s.flux as f32 * scale,
                 _pad: [0.0; 3],
             });
         }
@@ -303,18 +307,19 @@ impl Compositor {
         Ok(uploaded)
     }
 
-    /// Tone maps `hdr` (a `width × height` linear target) to 8-bit sRGB and reads it back as
-    /// RGB bytes, row-major.
+    /// Tone maps `hdr` (a `width × height` linear target, its values times `1 / unscale`, a
+    /// power of two) to 8-bit sRGB and reads it back as RGB bytes, row-major.
     pub fn tone_map(
         &mut self,
         ctx: &GpuContext,
         hdr: &wgpu::TextureView,
+        unscale: f32,
         (width, height): (u32, u32),
         exposure_ev: f32,
         curve: ToneCurve,
     ) -> Result<Vec<u8>, GpuError> {
         let block = ToneBlock {
-            scale: exposure_ev.exp2(),
+            scale: exposure_ev.exp2() * unscale,
             curve: match curve {
                 ToneCurve::Aces => 0,
                 ToneCurve::Clamp => 1,

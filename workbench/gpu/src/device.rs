@@ -30,6 +30,9 @@ pub struct AdapterReport {
     pub software: bool,
     /// True when the device measures GPU time per pass (timestamp queries).
     pub timestamps: bool,
+    /// True when the device blends into 32-bit float targets (`FLOAT32_BLENDABLE`), which
+    /// the default accumulation format ([`crate::AccumFormat::F32`]) needs.
+    pub float32_blendable: bool,
 }
 
 /// An open device with its queue, and what it runs on. Errors the device reports outside a
@@ -74,14 +77,14 @@ impl GpuContext {
             });
         }
         let features = adapter.features();
-        if !features.contains(wgpu::Features::FLOAT32_BLENDABLE) {
-            return Err(GpuError::Unsupported {
-                name: info.name,
-                what: "it cannot blend into 32-bit float targets (FLOAT32_BLENDABLE)".into(),
-            });
-        }
+        // Asked for where there is one: a renderer accumulating in f32 needs it
+        // (`GhostRenderer::new` says so), one accumulating in f16 does not.
+        let float32_blendable = features.contains(wgpu::Features::FLOAT32_BLENDABLE);
         let timestamps = features.contains(wgpu::Features::TIMESTAMP_QUERY);
-        let mut required = wgpu::Features::FLOAT32_BLENDABLE;
+        let mut required = wgpu::Features::empty();
+        if float32_blendable {
+            required |= wgpu::Features::FLOAT32_BLENDABLE;
+        }
         if timestamps {
             required |= wgpu::Features::TIMESTAMP_QUERY;
         }
@@ -123,6 +126,7 @@ impl GpuContext {
             .to_string(),
             software,
             timestamps,
+            float32_blendable,
         };
         Ok(GpuContext {
             device,

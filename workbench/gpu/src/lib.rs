@@ -24,4 +24,5 @@ pub use compose::ToneCurve;
 pub use device::{AdapterChoice, AdapterReport, GpuContext};
 pub use error::GpuError;
 pub use renderer::{FrameReport, GhostRenderer};
+pub use targets::AccumFormat;
 pub use timing::PassTiming;

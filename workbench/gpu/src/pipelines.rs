@@ -1,7 +1,7 @@
 //! The render pipelines and their bind group layouts: one raster pipeline per kind of ghost
 //! triangle (wholly open, edge, fringed), and the upsampling pass.
 
-use crate::targets::TARGET_FORMAT;
+use crate::targets::AccumFormat;
 
 /// The kinds of ghost triangle (flarebench_sdk::ghost::mesh::GhostMesh's three meshes).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -107,17 +107,18 @@ const ADD: wgpu::BlendState = wgpu::BlendState {
     },
 };
 
-/// A linear target ([`TARGET_FORMAT`]) blended additively.
-pub(crate) fn additive_target() -> wgpu::ColorTargetState {
+/// A linear target of `format` blended additively.
+pub(crate) fn additive_target(format: AccumFormat) -> wgpu::ColorTargetState {
     wgpu::ColorTargetState {
-        format: TARGET_FORMAT,
+        format: format.texture_format(),
         blend: Some(ADD),
         write_mask: wgpu::ColorWrites::ALL,
     }
 }
 
 impl Pipelines {
-    pub fn new(device: &wgpu::Device) -> Pipelines {
+    /// The pipelines drawing into targets of `format`.
+    pub fn new(device: &wgpu::Device, format: AccumFormat) -> Pipelines {
         use wgpu::ShaderStages as S;
         let both = S::VERTEX | S::FRAGMENT;
         let raster_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -171,13 +172,14 @@ impl Pipelines {
                 immediate_size: 0,
             });
         let raster = [
-            raster_pipeline(device, &layout, &raster_module, Kind::Open),
-            raster_pipeline(device, &layout, &raster_module, Kind::Edge),
+            raster_pipeline(device, &layout, &raster_module, Kind::Open, format),
+            raster_pipeline(device, &layout, &raster_module, Kind::Edge, format),
             raster_pipeline(
                 device,
                 &fringe_pipeline_layout,
                 &fringe_module,
                 Kind::Fringe,
+                format,
             ),
         ];
         let upsample = crate::compose::pipeline(
@@ -185,7 +187,7 @@ impl Pipelines {
             &upsample_layout,
             include_str!("shaders/upsample.wgsl"),
             ("vs_full", "fs_upsample"),
-            additive_target(),
+            additive_target(format),
         );
         Pipelines {
             raster_layout,
@@ -282,6 +284,7 @@ fn raster_pipeline(
     layout: &wgpu::PipelineLayout,
     module: &wgpu::ShaderModule,
     kind: Kind,
+    format: AccumFormat,
 ) -> wgpu::RenderPipeline {
     let constants = [("ATTRS", f64::from(kind.attrs()))];
     let options = wgpu::PipelineCompilationOptions {
@@ -308,7 +311,7 @@ fn raster_pipeline(
             module,
             entry_point: Some(kind.entry()),
             compilation_options: options,
-            targets: &[Some(additive_target())],
+            targets: &[Some(additive_target(format))],
         }),
         multiview_mask: None,
         cache: None,

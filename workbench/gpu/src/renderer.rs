@@ -1,7 +1,8 @@
 //! [`GhostRenderer`]: the GPU backend as a [`GhostSink`]. A frame's meshes are gathered as
 //! they come, uploaded once when the frame ends, and drawn level by level: each coarse level
-//! into its own Rgba32Float target, then the output target — the coarse levels added by
-//! exact bilinear upsampling, the full-resolution meshes drawn on top, all additively.
+//! into its own float target ([`AccumFormat`]: Rgba32Float by default), then the output
+//! target — the coarse levels added by exact bilinear upsampling, the full-resolution meshes
+//! drawn on top, all additively.
 
 use std::sync::Arc;
 
@@ -16,7 +17,7 @@ use flarebench_sdk::starburst::StarburstSplat;
 use crate::buffers::GrowBuffer;
 use crate::compose::{Compositor, ToneCurve};
 use crate::pipelines::{Kind, Pipelines};
-use crate::targets::{LevelTargets, TARGET_FORMAT};
+use crate::targets::{AccumFormat, LevelTargets, pow2};
 use crate::timing::{PassTimer, PassTiming};
 use crate::uniforms::{ApertureBlock, BLOCK_STRIDE, LevelBlock, UpsampleBlock, strided};
 use crate::{GpuContext, GpuError};
@@ -87,6 +88,9 @@ pub struct FrameReport {
 #[derive(Debug)]
 pub struct GhostRenderer {
     ctx: Arc<GpuContext>,
+    accum: AccumFormat,
+    /// Values are accumulated times 2^scale_log2 ([`Self::set_scale_log2`]).
+    scale_log2: i32,
     pipelines: Pipelines,
     compositor: Compositor,
     kinds: [KindBuffers; 3],
@@ -112,14 +116,27 @@ pub struct GhostRenderer {
 }
 
 impl GhostRenderer {
-    /// A renderer on `ctx`'s device.
-    pub fn new(ctx: Arc<GpuContext>) -> GhostRenderer {
+    /// A renderer on `ctx`'s device accumulating in `accum` (`AccumFormat::default()` is
+    /// f32). f32 needs a device that blends 32-bit float targets
+    /// ([`crate::AdapterReport::float32_blendable`]); without it this fails with
+    /// [`GpuError::Unsupported`], and f16 still renders.
+    pub fn new(ctx: Arc<GpuContext>, accum: AccumFormat) -> Result<GhostRenderer, GpuError> {
+        if accum == AccumFormat::F32 && !ctx.report.float32_blendable {
+            return Err(GpuError::Unsupported {
+                name: ctx.report.name.clone(),
+                what: "it cannot blend into 32-bit float targets (FLOAT32_BLENDABLE), which \
+                       the f32 accumulation needs; `--backend cpu` renders on the CPU"
+                    .into(),
+            });
+        }
         let device = &ctx.device;
         let storage = wgpu::BufferUsages::STORAGE;
         let uniform = wgpu::BufferUsages::UNIFORM;
-        GhostRenderer {
-            pipelines: Pipelines::new(device),
-            compositor: Compositor::new(device),
+        Ok(GhostRenderer {
+            accum,
+            scale_log2: 0,
+            pipelines: Pipelines::new(device, accum),
+            compositor: Compositor::new(device, accum),
             kinds: [Kind::Open, Kind::Edge, Kind::Fringe].map(|k| KindBuffers::new(device, k)),
             fringe_tables: GrowBuffer::new(device, "fringe tables", storage),
             level_blocks: GrowBuffer::new(device, "level blocks", uniform),
@@ -132,7 +149,7 @@ impl GhostRenderer {
             }),
             mask_fields: GrowBuffer::new(device, "mask fields", storage),
             mask_uploaded: None,
-            targets: LevelTargets::default(),
+            targets: LevelTargets::new(accum),
             timer: ctx.report.timestamps.then(|| PassTimer::new(&ctx)),
             frame: None,
             grids: Vec::new(),
@@ -143,7 +160,26 @@ impl GhostRenderer {
             error: None,
             report: FrameReport::default(),
             ctx,
-        }
+        })
+    }
+
+    /// The format the levels and the output accumulate in.
+    pub fn accum(&self) -> AccumFormat {
+        self.accum
+    }
+
+    /// Accumulates the next frames' values times 2^`log2` (clamped to ±64), divided out again
+    /// by [`Self::read_back`] and [`Self::tone_map`]; 0 by default. A power of two is exact in
+    /// f32 (barring overflow), so the f32 image does not change; what it is for is f16
+    /// ([`AccumFormat::F16`]), whose normal range (6.1e-5 to 65504) a frame's values must be
+    /// lifted into (docs/gpu.md § Target format).
+    pub fn set_scale_log2(&mut self, log2: i32) {
+        self.scale_log2 = log2.clamp(-64, 64);
+    }
+
+    /// The scale's exponent ([`Self::set_scale_log2`]).
+    pub fn scale_log2(&self) -> i32 {
+        self.scale_log2
     }
 
     /// The device this renderer draws on.
@@ -151,8 +187,8 @@ impl GhostRenderer {
         &self.ctx
     }
 
-    /// The output target of the last frame (linear HDR, Rgba32Float): what [`Self::read_back`]
-    /// reads, and what a window samples.
+    /// The output target of the last frame (linear HDR, of [`Self::accum`]'s texture format):
+    /// what [`Self::read_back`] reads, and what a window samples.
     pub fn output(&self) -> Option<&wgpu::Texture> {
         self.targets.output()
     }
@@ -176,9 +212,9 @@ impl GhostRenderer {
         let Some(frame) = self.frame else {
             return Ok(HdrImage::new(0, 0));
         };
-        let image = self
-            .targets
-            .read_back(&self.ctx, frame.width, frame.height)?;
+        let image =
+            self.targets
+                .read_back(&self.ctx, frame.width, frame.height, pow2(-self.scale_log2))?;
         if let Some(timer) = &mut self.timer {
             self.report.passes = timer.read(&self.ctx)?;
         }
@@ -200,9 +236,14 @@ impl GhostRenderer {
             .timer
             .as_mut()
             .and_then(|t| t.pass("starbursts".to_string()));
-        let bytes = self
-            .compositor
-            .add_starbursts(&self.ctx, output, &frame, splats, timestamps)?;
+        let bytes = self.compositor.add_starbursts(
+            &self.ctx,
+            output,
+            pow2(self.scale_log2),
+            &frame,
+            splats,
+            timestamps,
+        )?;
         self.report.bytes_uploaded += bytes;
         if let Some(timer) = &self.timer {
             let mut encoder =
@@ -228,8 +269,9 @@ impl GhostRenderer {
             return Ok(Vec::new());
         };
         let size = (frame.width as u32, frame.height as u32);
+        let unscale = pow2(-self.scale_log2);
         self.compositor
-            .tone_map(&self.ctx, output, size, exposure_ev, curve)
+            .tone_map(&self.ctx, output, unscale, size, exposure_ev, curve)
     }
 
     fn fail(&mut self, e: GpuError) {
@@ -332,7 +374,7 @@ impl GhostRenderer {
                 LevelBlock {
                     size: [f.width as f32, f.height as f32],
                     min_area: self.min_area,
-                    _pad: 0.0,
+                    scale: pow2(self.scale_log2),
                 }
             })
             .collect();
@@ -526,6 +568,3 @@ impl GhostSink for GhostRenderer {
         }
     }
 }
-
-/// The target format of every level: linear RGBA, 32-bit float, blended additively.
-pub const FORMAT: wgpu::TextureFormat = TARGET_FORMAT;

@@ -13,7 +13,8 @@ pub const BLOCK_STRIDE: u64 = 256;
 pub struct LevelBlock {
     pub size: [f32; 2],
     pub min_area: f32,
-    pub _pad: f32,
+    /// A power of two every shade is multiplied by (`GhostRenderer::set_scale_log2`).
+    pub scale: f32,
 }
 
 /// `upsample.wgsl`'s `Upsample`.

@@ -6,7 +6,7 @@
 
 use std::sync::{Arc, OnceLock};
 
-use flarebench_gpu::{AdapterChoice, GhostRenderer, GpuContext};
+use flarebench_gpu::{AccumFormat, AdapterChoice, GhostRenderer, GpuContext};
 use flarebench_sdk::abi::author::Scene;
 use flarebench_sdk::abi::host::{self, LoadedPlugin};
 use flarebench_sdk::abi::params::defaults;
@@ -84,7 +84,7 @@ fn check(name: &str, aperture: Aperture) {
     assert!(c.relative_rmse < 1e-6, "{name}: {c:?}");
 
     // The GPU: the same frame through the renderer as a sink, added to the plugin's pixels.
-    let mut renderer = GhostRenderer::new(context());
+    let mut renderer = GhostRenderer::new(context(), AccumFormat::F32).unwrap();
     let mut gpu_pixels = HdrImage::new(0, 0);
     inst.render_into_sink(&scene, &values, &mut gpu_pixels, &mut renderer)
         .unwrap();

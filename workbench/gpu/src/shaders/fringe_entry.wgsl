@@ -7,5 +7,5 @@ fn fs_fringe(in: VsOut) -> @location(0) vec4<f32> {
     if !(s.weight > 0.0) {
         discard;
     }
-    return vec4<f32>(s.weight * fringe_shade(s.a), 0.0);
+    return vec4<f32>(level.scale * (s.weight * fringe_shade(s.a)), 0.0);
 }

@@ -15,7 +15,9 @@ struct Level {
     size: vec2<f32>,
     // Triangles of at least this many pixels² are point-sampled.
     min_area: f32,
-    _pad: f32,
+    // Every shade is multiplied by this power of two (GhostRenderer::set_scale_log2; 1 by
+    // default): exact in f32, and it lifts a frame's values into an f16 target's range.
+    scale: f32,
 }
 
 @group(0) @binding(0) var<uniform> level: Level;
@@ -296,7 +298,7 @@ fn fs_open(in: VsOut) -> @location(0) vec4<f32> {
     if !(s.weight > 0.0) {
         discard;
     }
-    return vec4<f32>(s.weight * vec3<f32>(s.a[0], s.a[1], s.a[2]), 0.0);
+    return vec4<f32>(level.scale * (s.weight * vec3<f32>(s.a[0], s.a[1], s.a[2])), 0.0);
 }
 
 // Edge triangles (flarebench_sdk::ghost::mesh::EdgeAttrs): the irradiance times the
@@ -313,5 +315,5 @@ fn fs_edge(in: VsOut) -> @location(0) vec4<f32> {
     if a[7] > 0.5 {
         t *= aperture_soft(a[3], a[4], feather);
     }
-    return vec4<f32>(s.weight * t * vec3<f32>(a[0], a[1], a[2]), 0.0);
+    return vec4<f32>(level.scale * (s.weight * t * vec3<f32>(a[0], a[1], a[2])), 0.0);
 }
