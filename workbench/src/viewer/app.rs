@@ -378,6 +378,7 @@ impl Viewer {
             system: Arc::clone(&self.system),
             scene: self.scene.clone(),
             reference: self.want_reference,
+            debug: None,
         });
         self.dirty = false;
     }

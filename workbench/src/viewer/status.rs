@@ -36,6 +36,9 @@ pub fn frame_line(f: &FlareFrame) -> String {
         100.0 * s.dropped_energy_fraction,
         s.triangles
     );
+    if let Some(t) = s.debug_ms {
+        line += &format!(" · debug trace {t:.1} ms");
+    }
     if let Some(e) = &f.error {
         line += &format!(
             " · error {:.2}% RMSE, energy {:+.2}%",
