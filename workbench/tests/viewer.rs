@@ -371,3 +371,451 @@ fn the_wheel_changes_the_exposure_without_rendering_anew() {
         mean(&after)
     );
 }
+
+/// A key pressed and released in one pass.
+fn key(k: egui::Key) -> Vec<Event> {
+    [true, false]
+        .map(|pressed| Event::Key {
+            key: k,
+            physical_key: None,
+            pressed,
+            repeat: false,
+            modifiers: Default::default(),
+        })
+        .to_vec()
+}
+
+/// The drawn ghost with the largest energy share.
+fn brightest_ghost(viewer: &Viewer) -> flarebench::viewer::flare_worker::GhostFootprint {
+    viewer
+        .frame_shown()
+        .unwrap()
+        .ghosts
+        .iter()
+        .max_by(|a, b| a.energy_share.total_cmp(&b.energy_share))
+        .expect("the Heliar at 8° draws ghosts")
+        .clone()
+}
+
+/// The entrance grid's points are computed as the tracer's are (x0 + width · i/(n − 1)): they
+/// lie on the rectangle's edges to within a few ulps of its size.
+const GRID_EDGE_TOLERANCE_MM: f64 = 1e-9;
+
+/// The stop crossing is stored in f32 (`GridTrace::stop_uv`) and scaled to mm in f64; its
+/// relative radius is recomputed from the millimetres, so the two agree to f64 rounding.
+const STOP_RADIUS_TOLERANCE: f64 = 1e-12;
+
+#[test]
+fn pressing_d_on_a_selected_ghost_traces_its_grid_stop_crossings_and_triangles() {
+    use flarebench::viewer::debug_view::DebugView;
+    use flarebench::viewer::ghost_debug::RayFate;
+
+    let system = lens("heliar-tronnier");
+    let mut viewer = Viewer::new(system.clone(), options(), Box::new(|| {}));
+    let mut target = Offscreen::new(WINDOW.0, WINDOW.1).unwrap();
+    settled(&mut viewer, &mut target);
+    let ghost = brightest_ghost(&viewer);
+    viewer.select_ghost(Some(ghost.path), false);
+    target.pass(&mut viewer, key(egui::Key::D));
+    assert_eq!(viewer.debug_view(), DebugView::Grid);
+    settled(&mut viewer, &mut target);
+    let f = viewer.frame_shown().unwrap();
+    let d = f
+        .debug
+        .as_ref()
+        .expect("the frame carries the debug trace")
+        .as_ref()
+        .expect("the selected ghost is drawn, so it is traced");
+    assert_eq!(d.path, ghost.path);
+
+    // (a) An n × n grid spanning the entrance rectangle.
+    let n = d.n;
+    assert!(n >= 4, "a rendered ghost's grid of {n} vertices a side");
+    assert_eq!(d.rays.len(), n * n);
+    let e = d.entrance;
+    assert!(!e.is_empty());
+    let eps = GRID_EDGE_TOLERANCE_MM * (1.0 + e.width().max(e.height()));
+    for r in &d.rays {
+        let [x, y] = r.entrance;
+        assert!(
+            x >= e.x0 - eps && x <= e.x1 + eps && y >= e.y0 - eps && y <= e.y1 + eps,
+            "grid point {x},{y} outside the entrance rectangle {e:?}"
+        );
+    }
+    // Its corners are the rectangle's corners.
+    let corner = |k: usize| d.rays[k].entrance;
+    assert!((corner(0)[0] - e.x0).abs() < eps && (corner(0)[1] - e.y0).abs() < eps);
+    assert!((corner(n * n - 1)[0] - e.x1).abs() < eps && (corner(n * n - 1)[1] - e.y1).abs() < eps);
+
+    // (b) The stop crossings: relative radius = hypot / the working stop radius, which is the
+    // paraxial stop opening; on the circular stop a ray is clipped there exactly when it is
+    // beyond 1.
+    let stop = flarebench_sdk::paraxial::stop_opening(&system);
+    assert_eq!(d.stop_radius, stop);
+    let reached: Vec<_> = d
+        .rays
+        .iter()
+        .filter(|r| r.fate != RayFate::Stopped)
+        .collect();
+    assert!(!reached.is_empty());
+    for r in &reached {
+        let rel = r.stop[0].hypot(r.stop[1]) / stop;
+        assert!(
+            (r.stop_relative_radius - rel).abs() <= STOP_RADIUS_TOLERANCE,
+            "stop relative radius {} against hypot/radius {rel}",
+            r.stop_relative_radius
+        );
+        // Away from the edge (f32 rounding of the crossing), the fate follows the radius.
+        if (rel - 1.0).abs() > 1e-5 {
+            assert_eq!(r.fate == RayFate::ClippedAtStop, rel > 1.0, "{r:?}");
+        }
+        assert!(r.relative_radius() >= r.stop_relative_radius);
+    }
+    let counts = d.fate_counts();
+    assert!(
+        counts[RayFate::Passes as usize] > 0,
+        "some rays pass: {counts:?}"
+    );
+
+    // (c), (d) Triangles with finite, positive irradiance, in the image.
+    assert!(!d.triangles.is_empty());
+    assert_eq!(d.image_size, (480, 270));
+    for t in &d.triangles {
+        assert!(
+            t.irradiance.is_finite() && t.irradiance > 0.0,
+            "triangle irradiance {}",
+            t.irradiance
+        );
+        assert!(t.pixels.iter().flatten().all(|v| v.is_finite()));
+        assert!(t.relative_radius.iter().all(|r| r.is_finite() && *r >= 0.0));
+    }
+    // The lit triangles land where the ghost's footprint says it lands: the mean of their
+    // centroids lies in its landing rectangle (turned by the light's azimuth), in pixels.
+    let lit: Vec<_> = d.triangles.iter().filter(|t| t.lit()).collect();
+    assert!(!lit.is_empty());
+    let mean = lit.iter().fold([0.0f64; 2], |m, t| {
+        let c = [0, 1].map(|a| t.pixels.iter().map(|p| p[a] as f64).sum::<f64>() / 3.0);
+        [m[0] + c[0], m[1] + c[1]]
+    });
+    let mean = mean.map(|v| v / lit.len() as f64);
+    let film = [system.film_width_mm, system.film_width_mm * 270.0 / 480.0];
+    // Back to sensor mm, then into the light's meridional frame.
+    let (x, y) = (
+        (0.5 - mean[0] / 480.0) * film[0],
+        (mean[1] / 270.0 - 0.5) * film[1],
+    );
+    let (s, c) = ghost.phi.sin_cos();
+    let (mx, my) = (x * c + y * s, -x * s + y * c);
+    let [x0, y0, x1, y1] = ghost.rect;
+    let (mx_margin, my_margin) = (0.05 * (x1 - x0), 0.05 * (y1 - y0));
+    assert!(
+        (x0 - mx_margin..=x1 + mx_margin).contains(&mx)
+            && (y0 - my_margin..=y1 + my_margin).contains(&my),
+        "the triangles' mean {mx},{my} is outside the ghost's landing rectangle {:?}",
+        ghost.rect
+    );
+}
+
+/// A debug view with no ghost selected asks for none and renders nothing new.
+#[test]
+fn the_debug_view_without_a_selected_ghost_traces_nothing() {
+    let mut viewer = Viewer::new(lens("heliar-tronnier"), options(), Box::new(|| {}));
+    let mut target = Offscreen::new(WINDOW.0, WINDOW.1).unwrap();
+    settled(&mut viewer, &mut target);
+    let id = viewer.frame_shown().unwrap().id;
+    target.pass(&mut viewer, key(egui::Key::D));
+    settled(&mut viewer, &mut target);
+    let f = viewer.frame_shown().unwrap();
+    assert_eq!(f.id, id, "no new render without a ghost to trace");
+    assert!(f.debug.is_none());
+}
+
+#[test]
+fn the_irradiance_view_colours_the_ghost_over_the_flare_with_the_ramp() {
+    use flarebench::viewer::debug_view::{DebugView, false_colour};
+
+    let (mut viewer, log) = logged(Viewer::new(
+        lens("heliar-tronnier"),
+        options(),
+        Box::new(|| {}),
+    ));
+    let mut target = Offscreen::new(WINDOW.0, WINDOW.1).unwrap();
+    settled(&mut viewer, &mut target);
+    let ghost = brightest_ghost(&viewer);
+    viewer.select_ghost(Some(ghost.path), false);
+    settled(&mut viewer, &mut target);
+    let plain = target.read().unwrap();
+    for _ in 0..4 {
+        target.pass(&mut viewer, key(egui::Key::D));
+    }
+    assert_eq!(viewer.debug_view(), DebugView::Irradiance);
+    settled(&mut viewer, &mut target);
+    let shown = target.read().unwrap();
+    let rect = flare_rect(&log);
+    let d = viewer
+        .frame_shown()
+        .unwrap()
+        .debug
+        .clone()
+        .unwrap()
+        .unwrap();
+
+    // Inside the flare rectangle the view differs.
+    let inside = |x: u32, y: u32| rect.contains(pos2(x as f32 + 0.5, y as f32 + 0.5));
+    let changed = plain
+        .enumerate_pixels()
+        .filter(|(x, y, p)| {
+            inside(*x, *y) && (0..3).any(|c| p[c].abs_diff(shown.get_pixel(*x, *y)[c]) > 24)
+        })
+        .count();
+    assert!(
+        changed > 500,
+        "only {changed} pixels changed inside the flare view"
+    );
+
+    // Where a large lit triangle lies, the screen shows a colour of the ramp.
+    let to_screen = |p: [f32; 2]| {
+        pos2(
+            rect.min.x + p[0] / 480.0 * rect.width(),
+            rect.min.y + p[1] / 270.0 * rect.height(),
+        )
+    };
+    let area = |t: &&flarebench::viewer::ghost_debug::DebugTriangle| {
+        let [a, b, c] = t.pixels.map(to_screen);
+        0.5 * ((b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y)).abs()
+    };
+    let on_screen = |t: &&flarebench::viewer::ghost_debug::DebugTriangle| {
+        t.pixels
+            .iter()
+            .all(|p| rect.shrink(2.0).contains(to_screen(*p)))
+    };
+    let big = d
+        .triangles
+        .iter()
+        .filter(|t| t.lit() && on_screen(t))
+        .max_by(|a, b| area(a).total_cmp(&area(b)))
+        .expect("a lit triangle in the flare view");
+    assert!(area(&big) > 20.0, "a lit triangle of some size on screen");
+    let centre = big.pixels.map(to_screen);
+    let cx = (centre[0].x + centre[1].x + centre[2].x) / 3.0;
+    let cy = (centre[0].y + centre[1].y + centre[2].y) / 3.0;
+    let p = shown.get_pixel(cx as u32, cy as u32);
+    let nearest = (0..=255)
+        .map(|k| {
+            let q = false_colour(k as f32 / 255.0);
+            [q.r(), q.g(), q.b()]
+                .iter()
+                .zip(p.0)
+                .map(|(a, b)| a.abs_diff(b))
+                .max()
+                .unwrap()
+        })
+        .min()
+        .unwrap();
+    assert!(
+        nearest <= 6,
+        "the pixel {p:?} under a lit triangle is not a ramp colour (off by {nearest})"
+    );
+}
+
+#[test]
+fn the_false_colour_ramp_runs_dark_to_light_and_clamps() {
+    use flarebench::viewer::debug_view::{
+        CLIPPED, IrradianceScale, false_colour, relative_radius_colour,
+    };
+    let rgb = |c: egui::Color32| [c.r(), c.g(), c.b()];
+    // Viridis's ends.
+    assert_eq!(rgb(false_colour(0.0)), [68, 1, 84]);
+    assert_eq!(rgb(false_colour(1.0)), [253, 231, 37]);
+    assert_eq!(rgb(false_colour(0.5)), [38, 130, 142]);
+    // Out of range and NaN clamp to the ends.
+    assert_eq!(false_colour(-3.0), false_colour(0.0));
+    assert_eq!(false_colour(7.0), false_colour(1.0));
+    assert_eq!(false_colour(f32::NAN), false_colour(0.0));
+    // Relative luminance rises strictly (a dark-to-light ramp reads as an order), with no
+    // jumps: neighbours 1/100 apart differ by at most 16 levels a channel.
+    let luminance = |c: egui::Color32| {
+        let lin = |v: u8| {
+            let v = v as f64 / 255.0;
+            if v <= 0.04045 {
+                v / 12.92
+            } else {
+                ((v + 0.055) / 1.055).powf(2.4)
+            }
+        };
+        0.2126 * lin(c.r()) + 0.7152 * lin(c.g()) + 0.0722 * lin(c.b())
+    };
+    for k in 0..100 {
+        let (a, b) = (
+            false_colour(k as f32 / 100.0),
+            false_colour((k + 1) as f32 / 100.0),
+        );
+        assert!(luminance(b) > luminance(a), "luminance falls at {k}/100");
+        let jump = (0..3).map(|c| rgb(a)[c].abs_diff(rgb(b)[c])).max().unwrap();
+        assert!(jump <= 16, "a jump of {jump} levels at {k}/100");
+    }
+    // The relative radius: the ramp up to 1, grey beyond.
+    assert_eq!(relative_radius_colour(1.0), false_colour(1.0));
+    assert_eq!(relative_radius_colour(0.25), false_colour(0.25));
+    assert_eq!(relative_radius_colour(1.0001), CLIPPED);
+    assert!(!(0..=255).any(|k| false_colour(k as f32 / 255.0) == CLIPPED));
+    // The irradiance's log scale: 1 at the max, 0 at its low end and below, evenly in
+    // decades between.
+    let scale = IrradianceScale {
+        max: 3.0,
+        decades: 4.0,
+    };
+    assert_eq!(scale.position(3.0), 1.0);
+    assert!((scale.position(3.0 / 100.0) - 0.5).abs() < 1e-6);
+    assert!((scale.position(3.0 / 10.0) - 0.75).abs() < 1e-6);
+    assert_eq!(scale.position(3e-9), 0.0);
+    assert_eq!(scale.position(0.0), 0.0);
+    assert_eq!(scale.position(f32::NAN), 0.0);
+    assert!((scale.ratio_at(0.5) - 0.01).abs() < 1e-7);
+    // Its range from the values: the largest down to the 2nd percentile, so one stray dim
+    // value among a hundred does not widen it…
+    let mut values: Vec<f32> = (0..100).map(|k| 1.0 + k as f32).collect();
+    values.push(1e-9);
+    let s = IrradianceScale::of(values.into_iter()).unwrap();
+    assert_eq!(s.max, 100.0);
+    assert!(
+        (s.decades - (100f32 / 2.0).log10()).abs() < 1e-5,
+        "{s:?}: down to the third smallest of 101, 2"
+    );
+    // … within its bounds: an even ghost spans a factor of 2, a wild one 4 decades.
+    let even = IrradianceScale::of([5.0f32; 10].into_iter()).unwrap();
+    assert_eq!(even.decades, IrradianceScale::MIN_DECADES);
+    let wild = IrradianceScale::of((0..100).map(|k| 10f32.powf(-(k as f32) / 10.0))).unwrap();
+    assert_eq!(wild.decades, IrradianceScale::MAX_DECADES);
+    assert!(IrradianceScale::of([0.0, -1.0, f32::NAN].into_iter()).is_none());
+}
+
+/// The debug trace is computed with its own loop over the grid (to keep each triangle's
+/// relative radius); its irradiances are the renderer's (`mesh_ghost`'s, for a white band)
+/// to f32 rounding of the mean of three corner values.
+const RENDERER_IRRADIANCE_TOLERANCE: f32 = 1e-5;
+
+#[test]
+fn the_debug_triangles_are_the_renderers_triangles() {
+    use flarebench::viewer::ghost_debug::{self, RayFate};
+    use flarebench_sdk::aperture::Aperture;
+    use flarebench_sdk::ghost::GridTrace;
+    use flarebench_sdk::ghost::context::{BandRef, GhostContext, GhostGrid, GhostLight};
+    use flarebench_sdk::ghost::mesh::GhostMesh;
+    use flarebench_sdk::ghost::render::mesh_ghost;
+    use ghost_raytrace::plan::{PlanOptions, plan};
+
+    let system = lens("heliar-tronnier");
+    let frame = flarebench::viewer::flare_worker::view_frame(&system, 480, 270);
+    let light = LightSpec::parse("8,30").unwrap();
+    let plans = plan(
+        &system,
+        std::slice::from_ref(&light),
+        &frame,
+        &PlanOptions::for_quality(Quality::Default, None),
+    )
+    .unwrap();
+    let p = &plans[0];
+    let job = p
+        .ghosts
+        .iter()
+        .max_by(|a, b| a.energy_share.total_cmp(&b.energy_share))
+        .unwrap();
+    let d = ghost_debug::compute(&system, &Aperture::Circular, frame, p, job.path).unwrap();
+    assert_eq!(d.entrance, job.bounds.entrance);
+    assert_eq!(d.n, job.grid);
+
+    let band = job
+        .bands
+        .iter()
+        .map(|b| &p.bands[b.band])
+        .find(|b| b.lambda_nm == d.lambda_nm)
+        .expect("the debug trace is at one of the ghost's bands");
+    let ctx = GhostContext {
+        system: &system,
+        aperture: &Aperture::Circular,
+        frame,
+        stop_radius: flarebench_sdk::paraxial::stop_opening(&system),
+        f_number: flarebench_sdk::paraxial::analyse(&system, flarebench_sdk::spectrum::LAMBDA_D_NM)
+            .unwrap()
+            .f_number,
+        trace_f64: false,
+    };
+    let ghost = GhostGrid {
+        path: job.path,
+        bounds: &job.bounds,
+        n: job.grid,
+        light: GhostLight {
+            theta: light.theta_deg.to_radians(),
+            phi: light.phi_deg.to_radians(),
+            irradiance: 1.0,
+        },
+    };
+    let white = BandRef {
+        rgb: [1.0; 3],
+        ..band.as_ref()
+    };
+    let mut mesh = GhostMesh::default();
+    mesh_ghost(&ctx, &ghost, &[white], &mut GridTrace::default(), &mut mesh);
+    let mut theirs: Vec<f32> = mesh
+        .open
+        .triangles
+        .iter()
+        .map(|t| t.map(|i| mesh.open.attrs[i as usize][0]))
+        .chain(
+            mesh.edge
+                .triangles
+                .iter()
+                .map(|t| t.map(|i| mesh.edge.attrs[i as usize][0])),
+        )
+        .map(|c| (c[0] + c[1] + c[2]) / 3.0)
+        .collect();
+    let mut ours: Vec<f32> = d.triangles.iter().map(|t| t.irradiance).collect();
+    assert_eq!(
+        ours.len(),
+        theirs.len(),
+        "as many triangles as the renderer"
+    );
+    assert!(ours.len() > 100);
+    ours.sort_by(f32::total_cmp);
+    theirs.sort_by(f32::total_cmp);
+    for (a, b) in ours.iter().zip(&theirs) {
+        assert!(
+            (a - b).abs() <= RENDERER_IRRADIANCE_TOLERANCE * b.abs(),
+            "irradiance {a} against the renderer's {b}"
+        );
+    }
+
+    // With a five-bladed iris, a ray crossing the stop outside the circle through the tips is
+    // clipped there, and one inside the circle the blades touch is not clipped there.
+    let iris = Aperture::Iris {
+        blades: 5,
+        rotation_rad: 0.0,
+        roundness: 0.0,
+    };
+    let di = ghost_debug::compute(&system, &iris, frame, p, job.path).unwrap();
+    let inscribed = (std::f64::consts::PI / 5.0).cos();
+    let (mut outside, mut inside) = (0, 0);
+    for r in di.rays.iter().filter(|r| r.fate != RayFate::Stopped) {
+        if r.stop_relative_radius > 1.0 + 1e-5 {
+            assert_eq!(r.fate, RayFate::ClippedAtStop, "{r:?}");
+            outside += 1;
+        } else if r.stop_relative_radius < inscribed - 1e-5 {
+            assert_ne!(r.fate, RayFate::ClippedAtStop, "{r:?}");
+            inside += 1;
+        }
+    }
+    assert!(
+        outside > 0 && inside > 0,
+        "{outside} outside, {inside} inside"
+    );
+    // Between the two circles the iris clips some rays the circle would let through.
+    let between_clipped = di
+        .rays
+        .iter()
+        .filter(|r| {
+            r.fate == RayFate::ClippedAtStop && (inscribed..=1.0).contains(&r.stop_relative_radius)
+        })
+        .count();
+    assert!(between_clipped > 0, "the iris's corners cut some rays");
+}

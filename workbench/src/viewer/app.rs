@@ -13,6 +13,7 @@ use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::ghost::{GhostPath, enumerate_ghosts};
 use ghost_raytrace::scene::{LightSpec, Quality};
 
+use super::debug_view::{DebugState, DebugView};
 use super::flare_view;
 use super::flare_worker::{FlareFrame, FlareJob, FlareScene, FlareWorker, Stage, WorkerEvent};
 use super::lens_view::{self, LensCamera, LensOverlay};
@@ -80,6 +81,10 @@ pub struct Viewer {
     blades: u32,
     per_wavelength: bool,
     pub(super) labels: bool,
+    /// The debug view shown for the selected ghost (`D`).
+    debug_view: DebugView,
+    /// The ghost the last job submitted traces for the debug views.
+    submitted_debug: Option<GhostPath>,
     want_reference: bool,
     worker: FlareWorker,
     next_id: u64,
@@ -144,6 +149,8 @@ impl Viewer {
             blades: options.blades,
             per_wavelength: false,
             labels: false,
+            debug_view: DebugView::Off,
+            submitted_debug: None,
             want_reference: false,
             worker,
             next_id: 0,
@@ -210,6 +217,35 @@ impl Viewer {
     /// The selected ghost.
     pub fn selected_ghost(&self) -> Option<GhostPath> {
         self.selected_ghost
+    }
+
+    /// The debug view shown (`D`).
+    pub fn debug_view(&self) -> DebugView {
+        self.debug_view
+    }
+
+    /// The ghost the debug views want traced: the selected one, while a view is on.
+    fn wanted_debug(&self) -> Option<GhostPath> {
+        self.selected_ghost
+            .filter(|_| self.debug_view != DebugView::Off)
+    }
+
+    /// What the debug view has to draw: the shown frame's trace of the selected ghost, or why
+    /// there is none.
+    pub(super) fn debug_state(&self) -> DebugState<'_> {
+        let Some(g) = self.selected_ghost else {
+            return DebugState::Note("select a ghost (click it, or N)");
+        };
+        let Some(f) = &self.shown else {
+            return DebugState::Note("tracing the ghost…");
+        };
+        // The newest job's answer is the selection's (an older one's may be another ghost's).
+        let newest = f.id == self.next_id && self.submitted_debug == Some(g);
+        match &f.debug {
+            Some(Ok(d)) if d.path == g => DebugState::Ready(d),
+            Some(Err(why)) if newest => DebugState::Note(why),
+            _ => DebugState::Note("tracing the ghost…"),
+        }
     }
 
     /// True when the newest job has been rendered to its last stage and nothing waits.
@@ -379,7 +415,9 @@ impl Viewer {
             system: Arc::clone(&self.system),
             scene: self.scene.clone(),
             reference: self.want_reference,
+            debug: self.wanted_debug(),
         });
+        self.submitted_debug = self.wanted_debug();
         self.dirty = false;
     }
 
@@ -403,6 +441,10 @@ impl Viewer {
         }
         for e in self.worker.poll() {
             self.on_worker(e);
+        }
+        // A debug view needs the selected ghost traced: a new job when the last did not.
+        if self.wanted_debug().is_some() && self.wanted_debug() != self.submitted_debug {
+            self.dirty = true;
         }
         if self.dirty {
             self.submit();
@@ -556,6 +598,10 @@ impl Viewer {
         }
         if pressed(Key::L) {
             self.labels = !self.labels;
+        }
+        if pressed(Key::D) {
+            self.debug_view = self.debug_view.next();
+            self.log(format!("debug view {}", self.debug_view.name()));
         }
         if pressed(Key::W) {
             self.per_wavelength = !self.per_wavelength;

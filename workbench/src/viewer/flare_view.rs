@@ -1,5 +1,6 @@
 //! The flare view: the newest frame fitted into the panel, a drag to move the first light, the
-//! wheel for exposure, a click to select the ghost under the mouse, and ghost labels.
+//! wheel for exposure, a click to select the ghost under the mouse, ghost labels, and the
+//! selected ghost's debug view ([`super::debug_view`]).
 
 use egui::{Align2, Color32, FontId, Pos2, Rect, Sense, Stroke, Ui, pos2, vec2};
 use flarebench_sdk::ghost::GhostPath;
@@ -108,6 +109,7 @@ pub fn show(ui: &mut Ui, viewer: &Viewer) -> (Rect, FlareAction) {
             viewer.labels,
         );
     }
+    super::debug_view::draw(&painter, rect, viewer.debug_view(), viewer.debug_state());
 
     let mut action = FlareAction::None;
     if response.hovered() {

@@ -28,6 +28,8 @@ use crate::compose::StarburstSetup;
 use crate::output::{ToneMap, ToneOperator};
 use crate::report::ErrorReport;
 
+use super::ghost_debug::{self, GhostDebug};
+
 /// What the flare view shows: everything a render depends on besides the lens.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FlareScene {
@@ -53,6 +55,8 @@ pub struct FlareJob {
     pub scene: FlareScene,
     /// Also render the dense reference and report the error against it (slow).
     pub reference: bool,
+    /// Trace this ghost alone for the first light for the debug views ([`GhostDebug`]).
+    pub debug: Option<GhostPath>,
 }
 
 /// The stages of a job, in the order they are rendered.
@@ -93,6 +97,8 @@ pub struct FrameStats {
     pub total_ms: f64,
     /// Time to render the dense reference (the reference stage only).
     pub reference_ms: Option<f64>,
+    /// Time to trace the debug views' ghost (when asked for).
+    pub debug_ms: Option<f64>,
     /// The automatic exposure of the frame (stops, before the scene's offset).
     pub auto_exposure_ev: f32,
 }
@@ -113,6 +119,8 @@ pub struct FlareFrame {
     pub ghosts: Vec<GhostFootprint>,
     pub backend: BackendReport,
     pub error: Option<ErrorReport>,
+    /// The debug views' ghost ([`FlareJob::debug`]) traced alone, or why it could not be.
+    pub debug: Option<Result<Arc<GhostDebug>, String>>,
 }
 
 /// What the worker sends back.
@@ -380,12 +388,21 @@ impl Renderer {
         } else {
             plan::plan(sys, &scene.lights, &frame, &preset)?
         };
+        stats.plan_ms = ms(t);
+
+        let t = Instant::now();
+        let debug = job.debug.map(|path| match plans.first() {
+            Some(p) => ghost_debug::compute(sys, &scene.aperture, frame, p, path).map(Arc::new),
+            None => Err("no ghosts are drawn (starburst only)".to_string()),
+        });
+        if debug.is_some() {
+            stats.debug_ms = Some(ms(t));
+        }
         if let Some(solo) = &scene.solo {
             for p in &mut plans {
                 p.ghosts.retain(|g| g.path == *solo);
             }
         }
-        stats.plan_ms = ms(t);
 
         let t = Instant::now();
         let (mut img, ghost_stats) = self.backend.render(
@@ -459,6 +476,7 @@ impl Renderer {
             ghosts,
             backend,
             error: None,
+            debug,
         })
     }
 }

@@ -6,6 +6,9 @@
 //! - `lens_view`: the lens section painted from [`crate::lens_drawing`], pan, zoom, hover
 //! - `flare_view`: the flare image, light drag, exposure, ghost picking and labels
 //! - `flare_worker`: the render thread (newest job wins; fast, settled, reference stages)
+//! - `ghost_debug`: the selected ghost traced alone for the debug views (on the render thread)
+//! - `debug_view`: the debug views drawn over the flare (grid, stop, relative radius,
+//!   irradiance) and their false-colour ramp
 //! - `status`: the status line
 //! - `gfx`: egui's shapes drawn with wgpu into any texture view
 //! - `offscreen`: the viewer drawn into a texture and read back (tests, screenshots)
@@ -14,9 +17,11 @@
 //! docs/window.md describes the views, the controls and the threads.
 
 pub mod app;
+pub mod debug_view;
 pub mod flare_view;
 pub mod flare_worker;
 pub mod gfx;
+pub mod ghost_debug;
 pub mod lens_view;
 pub mod offscreen;
 pub mod status;

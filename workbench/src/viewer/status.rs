@@ -11,7 +11,8 @@ use super::flare_worker::{FlareFrame, Stage};
 pub fn help_line() -> &'static str {
     "lens: drag pan · wheel zoom · F fit · W wavelengths | flare: drag light · wheel exposure · \
      click ghost · N / Shift-N next/previous ghost · G ghost alone · S starburst on/off/only · \
-     Q quality · B blades · L labels · E error · P save PNG · X save EXR"
+     Q quality · B blades · L labels · D debug view (grid/stop/radius/irradiance) · E error · \
+     P save PNG · X save EXR"
 }
 
 /// The frame's figures as one line of text.
@@ -36,6 +37,9 @@ pub fn frame_line(f: &FlareFrame) -> String {
         100.0 * s.dropped_energy_fraction,
         s.triangles
     );
+    if let Some(t) = s.debug_ms {
+        line += &format!(" · debug trace {t:.1} ms");
+    }
     if let Some(e) = &f.error {
         line += &format!(
             " · error {:.2}% RMSE, energy {:+.2}%",
@@ -86,6 +90,9 @@ pub fn show(ui: &mut Ui, v: &Viewer) {
                 extra += &format!(" · ghost {g}");
                 if v.scene().solo.is_some() {
                     extra += " alone";
+                }
+                if v.debug_view() != super::debug_view::DebugView::Off {
+                    extra += &format!(" · debug view {}", v.debug_view().name());
                 }
             }
             ui.label(extra);
