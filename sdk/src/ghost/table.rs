@@ -85,6 +85,16 @@ pub fn fingerprint(system: &LensSystem) -> String {
     format!("{h:016x}")
 }
 
+/// The largest angle a table covers by default (degrees): half the film diagonal's field (at
+/// the d line's focal length) plus 10°, at most 89°.
+pub fn default_max_angle_deg(system: &LensSystem) -> Result<f64, crate::paraxial::ParaxialError> {
+    let efl = crate::paraxial::analyse(system, crate::spectrum::LAMBDA_D_NM)?
+        .efl_mm
+        .abs();
+    let half_diag = 0.5 * system.film_width_mm.hypot(system.film_height_mm);
+    Ok(((half_diag / efl).atan().to_degrees() + 10.0).min(89.0))
+}
+
 /// Angles from 0 to `max_deg` in steps of at most `step_deg`.
 pub fn angle_steps(max_deg: f64, step_deg: f64) -> Vec<f64> {
     let n = (max_deg / step_deg).ceil().max(1.0) as usize;
@@ -156,34 +166,17 @@ impl BoundsTable {
             );
         }
         start(ghosts.len());
-        // Ghosts in parallel; within a ghost, angles in order, each search starting from the
-        // previous angle's rectangle.
-        let bounds: Vec<Vec<Option<GhostBounds>>> = ghosts
-            .par_iter()
-            .map_init(GridTrace::default, |scratch, &g| {
-                let mut prev: Option<GhostBounds> = None;
-                let seq = bounds::ghost_sequence(system, g, &tables);
-                let row: Vec<Option<GhostBounds>> = angles_deg
-                    .iter()
-                    .map(|&deg| {
-                        let theta = deg.to_radians();
-                        let b = match mode {
-                            BoundsMode::Precise => seq.as_ref().and_then(|seq| {
-                                let start = prev.map(|p| p.entrance);
-                                bounds::precise_from(system, seq, theta, reference, start, scratch)
-                            }),
-                            BoundsMode::Approximate => {
-                                bounds::approximate(system, g, wavelength_nm, theta)
-                            }
-                        };
-                        prev = b;
-                        b
-                    })
-                    .collect();
-                progress();
-                row
-            })
-            .collect();
+        let bounds = compute_rows(
+            system,
+            &ghosts,
+            &tables,
+            reference,
+            angles_deg,
+            mode,
+            wavelength_nm,
+            None,
+            progress,
+        );
         BoundsTable {
             format: FORMAT.to_string(),
             version: if four { VERSION_FOUR } else { VERSION },
@@ -198,6 +191,48 @@ impl BoundsTable {
                 .then_some(options.four_reflection_bound_threshold),
             four_reflection_paths: four_paths,
         }
+    }
+
+    /// Adds `angles_deg` (above the table's last angle, ascending) for the same ghosts, each
+    /// ghost's search continuing from its rectangle at the last angle: the table is then what
+    /// one [`Self::compute_with`] over all its angles would have made, bit for bit.
+    pub fn extend(&mut self, system: &LensSystem, angles_deg: &[f64]) -> Result<(), String> {
+        self.check_for(system)?;
+        if angles_deg
+            .first()
+            .zip(self.angles_deg.last())
+            .is_some_and(|(a, b)| a <= b)
+            || !angles_deg.windows(2).all(|w| w[1] > w[0])
+        {
+            return Err("the angles added must ascend beyond the table's last".into());
+        }
+        let tables = InterfaceTableSet::for_system(system, self.wavelength_nm);
+        let reference = if self.mode == BoundsMode::Precise || self.has_four_reflections() {
+            bounds::reference_flux(system, &tables, &mut GridTrace::default())
+        } else {
+            0.0
+        };
+        let last: Vec<Option<GhostBounds>> = self
+            .bounds
+            .iter()
+            .map(|row| row.last().copied().flatten())
+            .collect();
+        let rows = compute_rows(
+            system,
+            &self.ghosts,
+            &tables,
+            reference,
+            angles_deg,
+            self.mode,
+            self.wavelength_nm,
+            Some(&last),
+            &|| {},
+        );
+        self.angles_deg.extend_from_slice(angles_deg);
+        for (row, more) in self.bounds.iter_mut().zip(rows) {
+            row.extend(more);
+        }
+        Ok(())
     }
 
     /// True when the table was computed with four-reflection ghosts (some may have been left
@@ -277,4 +312,48 @@ impl BoundsTable {
     pub fn ghost_index(&self, path: GhostPath) -> Option<usize> {
         self.ghosts.iter().position(|&g| g == path)
     }
+}
+
+/// Each ghost's bounds at each angle: ghosts in parallel; within a ghost, angles in order, each
+/// precise search starting from the previous angle's rectangle (from `prev[g]` at the first
+/// angle, when given).
+#[allow(clippy::too_many_arguments)]
+fn compute_rows(
+    system: &LensSystem,
+    ghosts: &[GhostPath],
+    tables: &InterfaceTableSet,
+    reference: f64,
+    angles_deg: &[f64],
+    mode: BoundsMode,
+    wavelength_nm: f64,
+    prev: Option<&[Option<GhostBounds>]>,
+    progress: &(dyn Fn() + Sync),
+) -> Vec<Vec<Option<GhostBounds>>> {
+    ghosts
+        .par_iter()
+        .enumerate()
+        .map_init(GridTrace::default, |scratch, (k, &g)| {
+            let mut prev: Option<GhostBounds> = prev.and_then(|p| p[k]);
+            let seq = bounds::ghost_sequence(system, g, tables);
+            let row: Vec<Option<GhostBounds>> = angles_deg
+                .iter()
+                .map(|&deg| {
+                    let theta = deg.to_radians();
+                    let b = match mode {
+                        BoundsMode::Precise => seq.as_ref().and_then(|seq| {
+                            let start = prev.map(|p| p.entrance);
+                            bounds::precise_from(system, seq, theta, reference, start, scratch)
+                        }),
+                        BoundsMode::Approximate => {
+                            bounds::approximate(system, g, wavelength_nm, theta)
+                        }
+                    };
+                    prev = b;
+                    b
+                })
+                .collect();
+            progress();
+            row
+        })
+        .collect()
 }

@@ -8,9 +8,7 @@ use anyhow::Context;
 use clap::{Args, ValueEnum};
 use flarebench_sdk::ghost::ReflectionOrder;
 use flarebench_sdk::ghost::bounds::BoundsMode;
-use flarebench_sdk::ghost::table::{BoundsTable, TableOptions, angle_steps};
-use flarebench_sdk::paraxial::analyse;
-use flarebench_sdk::spectrum::LAMBDA_D_NM;
+use flarebench_sdk::ghost::table::{BoundsTable, TableOptions, angle_steps, default_max_angle_deg};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::lens_library;
@@ -64,14 +62,9 @@ pub fn run(args: &PrecomputeArgs, quiet: bool) -> anyhow::Result<()> {
     let loaded = lens_library::load(&args.lens, quiet || args.json)?;
     let sys = &loaded.system;
     let max = match args.max_angle_deg {
-        Some(m) => m,
-        None => {
-            let efl = analyse(sys, LAMBDA_D_NM)?.efl_mm.abs();
-            let half_diag = 0.5 * sys.film_width_mm.hypot(sys.film_height_mm);
-            (half_diag / efl).atan().to_degrees() + 10.0
-        }
-    }
-    .min(89.0);
+        Some(m) => m.min(89.0),
+        None => default_max_angle_deg(sys)?,
+    };
     anyhow::ensure!(max > 0.0, "--max-angle-deg must be positive");
     let angles = angle_steps(max, args.step_deg);
     let mode = match args.mode {

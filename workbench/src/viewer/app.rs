@@ -264,6 +264,12 @@ impl Viewer {
                 .is_some_and(|f| f.id == self.next_id && f.stage >= last)
     }
 
+    /// True when the render thread has finished the bounds table of the newest lens
+    /// (`bounds_table`), so fast frames of a moved light are planned by lookup.
+    pub fn bounds_table_complete(&self) -> bool {
+        self.worker.bounds_table_complete()
+    }
+
     /// Why the newest render failed or panicked, if it did (nothing more will come of it).
     pub fn render_failure(&self) -> Option<&str> {
         self.failed.as_deref()

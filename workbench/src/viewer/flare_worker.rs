@@ -6,10 +6,11 @@
 //! the worker keeps serving.
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, Sender, channel};
 use std::sync::{Arc, Condvar, Mutex};
 use std::thread::JoinHandle;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use flarebench_sdk::LensSystem;
 use flarebench_sdk::aperture::Aperture;
@@ -18,7 +19,7 @@ use flarebench_sdk::ghost::{GhostPath, ReflectionOrder};
 use flarebench_sdk::image::HdrImage;
 use flarebench_sdk::starburst::{StarburstCache, StarburstSettings};
 use ghost_raytrace::ghosts::RenderOptions;
-use ghost_raytrace::plan::{self, PlanOptions};
+use ghost_raytrace::plan::{self, LensTables, PlanOptions};
 use ghost_raytrace::scene::{LightSpec, Quality};
 use rayon::prelude::*;
 
@@ -28,6 +29,7 @@ use crate::compose::StarburstSetup;
 use crate::output::{ToneMap, ToneOperator};
 use crate::report::ErrorReport;
 
+use super::bounds_table::BoundsTabulation;
 use super::ghost_debug::{self, GhostDebug};
 
 /// What the flare view shows: everything a render depends on besides the lens.
@@ -91,6 +93,9 @@ pub struct FrameStats {
     pub dropped_energy_fraction: f64,
     pub triangles: usize,
     pub plan_ms: f64,
+    /// The plan looked its bounds up in the lens's table (`bounds_table`) instead of tracing
+    /// them.
+    pub bounds_from_table: bool,
     pub ghosts_ms: f64,
     pub starburst_ms: f64,
     pub tone_ms: f64,
@@ -150,6 +155,8 @@ struct Pending {
 struct Shared {
     pending: Mutex<Pending>,
     wake: Condvar,
+    /// The bounds table of the newest job's lens is finished.
+    tabulated: AtomicBool,
 }
 
 impl Shared {
@@ -181,6 +188,7 @@ impl FlareWorker {
         let shared = Arc::new(Shared {
             pending: Mutex::new(Pending::default()),
             wake: Condvar::new(),
+            tabulated: AtomicBool::new(false),
         });
         let (tx, events) = channel();
         let s = Arc::clone(&shared);
@@ -212,12 +220,18 @@ impl FlareWorker {
     }
 
     /// The events that have arrived, oldest first, without waiting.
+    /// True when the bounds table of the newest job's lens is finished (`bounds_table`): its
+    /// fast frames are then planned by lookup.
+    pub fn bounds_table_complete(&self) -> bool {
+        self.shared.tabulated.load(Ordering::Relaxed)
+    }
+
     pub fn poll(&self) -> Vec<WorkerEvent> {
         self.events.try_iter().collect()
     }
 
     /// Waits for the next event (tests and headless use).
-    pub fn wait(&self, timeout: std::time::Duration) -> Option<WorkerEvent> {
+    pub fn wait(&self, timeout: Duration) -> Option<WorkerEvent> {
         self.events.recv_timeout(timeout).ok()
     }
 }
@@ -240,8 +254,13 @@ impl Drop for FlareWorker {
     }
 }
 
+/// How long the render thread must have been idle before it works on the bounds table: edits
+/// and drags in quick succession are not slowed by it.
+const IDLE_DELAY: Duration = Duration::from_millis(500);
+
 fn serve(shared: &Shared, choice: BackendChoice, tx: &Sender<WorkerEvent>, waker: &Waker) {
     let mut renderer: Option<Renderer> = None;
+    let mut idle_since = Instant::now();
     loop {
         let job = {
             let mut p = shared.pending.lock().unwrap_or_else(|e| e.into_inner());
@@ -250,10 +269,32 @@ fn serve(shared: &Shared, choice: BackendChoice, tx: &Sender<WorkerEvent>, waker
                     return;
                 }
                 if let Some(job) = p.job.take() {
-                    break job;
+                    break Some(job);
                 }
-                p = shared.wake.wait(p).unwrap_or_else(|e| e.into_inner());
+                if renderer.as_ref().is_some_and(Renderer::has_idle_work) {
+                    let waited = idle_since.elapsed();
+                    if waited >= IDLE_DELAY {
+                        break None;
+                    }
+                    p = shared
+                        .wake
+                        .wait_timeout(p, IDLE_DELAY - waited)
+                        .unwrap_or_else(|e| e.into_inner())
+                        .0;
+                } else {
+                    p = shared.wake.wait(p).unwrap_or_else(|e| e.into_inner());
+                }
             }
+        };
+        let Some(job) = job else {
+            // Nothing to render: tabulate a few more angles of the lens's bounds.
+            if let Some(r) = renderer.as_mut() {
+                r.idle_step();
+                shared
+                    .tabulated
+                    .store(!r.has_idle_work(), Ordering::Relaxed);
+            }
+            continue;
         };
         let mut stages = vec![Stage::Fast];
         if job.scene.quality != Quality::Fast || job.reference {
@@ -294,6 +335,11 @@ fn serve(shared: &Shared, choice: BackendChoice, tx: &Sender<WorkerEvent>, waker
                     }
                 }
             };
+            if let Some(r) = &renderer {
+                shared
+                    .tabulated
+                    .store(!r.has_idle_work(), Ordering::Relaxed);
+            }
             let stop = !matches!(event, WorkerEvent::Frame(_));
             if tx.send(event).is_err() {
                 return;
@@ -303,6 +349,7 @@ fn serve(shared: &Shared, choice: BackendChoice, tx: &Sender<WorkerEvent>, waker
                 break;
             }
         }
+        idle_since = Instant::now();
     }
 }
 
@@ -317,10 +364,14 @@ pub fn panic_message(p: &(dyn std::any::Any + Send)) -> String {
     }
 }
 
-/// The backend and the starburst cache, kept from frame to frame.
+/// The backend, the starburst cache and the lens's tables, kept from frame to frame.
 struct Renderer {
     backend: GhostBackend,
     starbursts: StarburstCache,
+    /// The lens's interface tables every 10 nm (rebuilt when the lens changes).
+    lens_tables: Option<LensTables>,
+    /// The lens's ghost bounds over the light's angles, built while idle.
+    tabulation: Option<BoundsTabulation>,
     /// Why the backend asked for could not be opened (the CPU is used instead).
     fallback: Option<String>,
 }
@@ -331,13 +382,32 @@ impl Renderer {
             Ok(backend) => Renderer {
                 backend,
                 starbursts: StarburstCache::new(),
+                lens_tables: None,
+                tabulation: None,
                 fallback: None,
             },
             Err(e) => Renderer {
                 backend: GhostBackend::open(BackendChoice::Cpu).expect("the CPU backend opens"),
                 starbursts: StarburstCache::new(),
+                lens_tables: None,
+                tabulation: None,
                 fallback: Some(format!("{e:#}; drawing on the CPU")),
             },
+        }
+    }
+
+    /// True when the lens's bounds table is not finished.
+    fn has_idle_work(&self) -> bool {
+        self.tabulation.as_ref().is_some_and(|t| !t.complete())
+    }
+
+    /// One chunk of the bounds table. A panic in it ends the tabulation (the plan then traces
+    /// bounds, as without a table); it is not reported, since no frame depends on it.
+    fn idle_step(&mut self) {
+        if let Some(t) = self.tabulation.as_mut()
+            && catch_unwind(AssertUnwindSafe(|| t.step())).is_err()
+        {
+            t.abandon();
         }
     }
 
@@ -382,7 +452,28 @@ impl Renderer {
         let mut stats = FrameStats::default();
 
         let t = Instant::now();
-        let preset = PlanOptions::for_quality(quality, None);
+        if self.lens_tables.as_ref().is_none_or(|l| !l.is_for(sys)) {
+            self.lens_tables = Some(LensTables::new(sys));
+        }
+        if self
+            .tabulation
+            .as_ref()
+            .is_none_or(|b| !b.is_for(&job.system))
+        {
+            self.tabulation = BoundsTabulation::new(Arc::clone(&job.system));
+        }
+        // Fast frames look bounds up once the table covers the lights; the settled frame
+        // traces them.
+        let table = match stage {
+            Stage::Fast => self
+                .tabulation
+                .as_ref()
+                .and_then(|b| b.table_for(&scene.lights)),
+            Stage::Settled | Stage::Reference => None,
+        };
+        stats.bounds_from_table = table.is_some();
+        let mut preset = PlanOptions::for_quality(quality, table);
+        preset.lens_tables = self.lens_tables.as_ref();
         let mut plans = if scene.starburst == StarburstMode::Only {
             Vec::new()
         } else {

@@ -9,6 +9,8 @@
 //! - `ghost_debug`: the selected ghost traced alone for the debug views (on the render thread)
 //! - `debug_view`: the debug views drawn over the flare (grid, stop, relative radius,
 //!   irradiance) and their false-colour ramp
+//! - `bounds_table`: the lens's ghost bounds tabulated over the light's angles while the render
+//!   thread is idle, for fast frames planned by lookup
 //! - `status`: the status line
 //! - `gfx`: egui's shapes drawn with wgpu into any texture view
 //! - `offscreen`: the viewer drawn into a texture and read back (tests, screenshots)
@@ -17,6 +19,7 @@
 //! docs/window.md describes the views, the controls and the threads.
 
 pub mod app;
+pub mod bounds_table;
 pub mod debug_view;
 pub mod flare_view;
 pub mod flare_worker;

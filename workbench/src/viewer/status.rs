@@ -24,11 +24,12 @@ pub fn frame_line(f: &FlareFrame) -> String {
         Stage::Reference => "with error",
     };
     let mut line = format!(
-        "{stage} frame ({}) {:.0} ms: plan {:.1}, ghosts {:.1}, starburst {:.1}, tone {:.1} ms · \
+        "{stage} frame ({}) {:.0} ms: plan {:.1}{}, ghosts {:.1}, starburst {:.1}, tone {:.1} ms · \
          {} ghosts drawn, {} left out ({:.2}% of the ghost energy) · {} triangles",
         f.quality.name(),
         s.total_ms,
         s.plan_ms,
+        if s.bounds_from_table { " (table)" } else { "" },
         s.ghosts_ms,
         s.starburst_ms,
         s.tone_ms,
