@@ -47,24 +47,39 @@ impl Gfx {
     pub fn paint(
         &mut self,
         ctx: &egui::Context,
-        mut output: egui::FullOutput,
+        output: egui::FullOutput,
         target: &wgpu::TextureView,
         size: [u32; 2],
     ) {
-        let ppp = output.pixels_per_point;
-        let shapes = std::mem::take(&mut output.shapes);
-        let jobs = ctx.tessellate(shapes, ppp);
-        let mut textures = std::mem::take(&mut output.textures_delta);
-        for (id, deltas) in textures.set.drain() {
+        let mut frame = Tessellated::new(ctx, output);
+        self.upload_textures(&mut frame);
+        self.draw(ctx, frame, target, size);
+    }
+
+    /// Applies the pass's texture changes (the flare image, font atlas) to the renderer.
+    pub fn upload_textures(&mut self, frame: &mut Tessellated) {
+        for (id, deltas) in frame.textures.set.drain() {
             for delta in &deltas {
                 self.renderer
                     .update_texture(&self.device, &self.queue, id, delta);
             }
         }
+    }
+
+    /// Draws a tessellated pass (its textures uploaded) into `target` and frees the textures it
+    /// let go of.
+    pub fn draw(
+        &mut self,
+        ctx: &egui::Context,
+        mut frame: Tessellated,
+        target: &wgpu::TextureView,
+        size: [u32; 2],
+    ) {
         let screen = ScreenDescriptor {
             size_in_pixels: size,
-            pixels_per_point: ppp,
+            pixels_per_point: frame.pixels_per_point,
         };
+        let jobs = &frame.jobs;
         let mut encoder = self
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -72,7 +87,7 @@ impl Gfx {
             });
         let extra =
             self.renderer
-                .update_buffers(&self.device, &self.queue, &mut encoder, &jobs, &screen);
+                .update_buffers(&self.device, &self.queue, &mut encoder, jobs, &screen);
         {
             let bg = ctx.global_style().visuals.panel_fill;
             let [r, g, b, _] = egui::Rgba::from(bg).to_array();
@@ -99,12 +114,39 @@ impl Gfx {
                     multiview_mask: None,
                 })
                 .forget_lifetime();
-            self.renderer.render(&mut pass, &jobs, &screen);
+            self.renderer.render(&mut pass, jobs, &screen);
         }
         self.queue
             .submit(extra.into_iter().chain([encoder.finish()]));
-        for id in textures.free.drain() {
+        self.free_textures(&mut frame);
+    }
+
+    /// Frees the textures a pass let go of (a pass that is not drawn must still do this).
+    pub fn free_textures(&mut self, frame: &mut Tessellated) {
+        for id in std::mem::take(&mut frame.textures.free) {
             self.renderer.free_texture(&id);
+        }
+    }
+}
+
+/// One egui pass tessellated: its triangles, clip rectangles and texture changes, ready to
+/// draw. Tessellation is the last CPU step of a pass before the device's work.
+#[derive(Debug)]
+pub struct Tessellated {
+    jobs: Vec<egui::ClippedPrimitive>,
+    textures: egui::TexturesDelta,
+    pixels_per_point: f32,
+}
+
+impl Tessellated {
+    /// Tessellates `output`'s shapes (egui's own tessellator, on the calling thread).
+    pub fn new(ctx: &egui::Context, mut output: egui::FullOutput) -> Tessellated {
+        let ppp = output.pixels_per_point;
+        let shapes = std::mem::take(&mut output.shapes);
+        Tessellated {
+            jobs: ctx.tessellate(shapes, ppp),
+            textures: std::mem::take(&mut output.textures_delta),
+            pixels_per_point: ppp,
         }
     }
 }

@@ -2,11 +2,23 @@
 //! [`Viewer::frame`] painted by [`Gfx`] into a texture and read back. Used by the golden-image
 //! tests and for screenshots.
 
+use std::time::{Duration, Instant};
+
 use anyhow::Context;
 use egui::{Event, RawInput, Rect, pos2, vec2};
 
 use super::app::Viewer;
-use super::gfx::Gfx;
+use super::gfx::{Gfx, Tessellated};
+
+/// Where an offscreen pass's time went.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PassTimes {
+    /// The viewer's egui pass and its tessellation: the CPU's share of a frame.
+    pub ui: Duration,
+    /// Texture uploads, drawing, and waiting for the device to finish (on lavapipe, the CPU
+    /// again; on a GPU, mostly the device's own time).
+    pub paint: Duration,
+}
 
 /// Offscreen target format: 8-bit sRGB-encoded values, read back as they are.
 const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
@@ -87,8 +99,38 @@ impl Offscreen {
         })
     }
 
-    /// One pass of `viewer` with `events` (mouse, keys), painted. Time advances 1/60 s.
-    pub fn pass(&mut self, viewer: &mut Viewer, events: Vec<Event>) {
+    /// One pass of `viewer` with `events` (mouse, keys), painted; it returns when the device
+    /// has finished drawing. Time advances 1/60 s.
+    pub fn pass(&mut self, viewer: &mut Viewer, events: Vec<Event>) -> PassTimes {
+        let t = Instant::now();
+        let mut frame = self.ui(viewer, events);
+        let ui = t.elapsed();
+        let t = Instant::now();
+        self.gfx.upload_textures(&mut frame);
+        let view = self.texture.create_view(&Default::default());
+        self.gfx.draw(&self.ctx, frame, &view, self.size);
+        // Wait for the device, so the time is the drawing's and not only its submission's.
+        let _ = self.gfx.device.poll(wgpu::PollType::wait_indefinitely());
+        PassTimes {
+            ui,
+            paint: t.elapsed(),
+        }
+    }
+
+    /// One pass laid out, tessellated and its textures uploaded (a new flare image included),
+    /// but not drawn: what a pass costs the CPU when a GPU draws it. The target keeps its last
+    /// painted image. Returns the layout and tessellation time.
+    pub fn pass_unpainted(&mut self, viewer: &mut Viewer, events: Vec<Event>) -> Duration {
+        let t = Instant::now();
+        let mut frame = self.ui(viewer, events);
+        let ui = t.elapsed();
+        self.gfx.upload_textures(&mut frame);
+        self.gfx.free_textures(&mut frame);
+        ui
+    }
+
+    /// Lays out one pass of the viewer and tessellates it.
+    fn ui(&mut self, viewer: &mut Viewer, events: Vec<Event>) -> Tessellated {
         self.time += 1.0 / 60.0;
         let input = RawInput {
             screen_rect: Some(Rect::from_min_size(
@@ -102,26 +144,25 @@ impl Offscreen {
             ..RawInput::default()
         };
         let output = self.ctx.run_ui(input, |ui| viewer.frame(ui));
-        let view = self.texture.create_view(&Default::default());
-        self.gfx.paint(&self.ctx, output, &view, self.size);
+        Tessellated::new(&self.ctx, output)
     }
 
     /// Runs passes until the viewer's newest render has arrived and is shown, or failed (then
     /// the status line shows why), or `timeout` passed; then one more pass so the frame is
     /// painted. True when it settled.
-    pub fn settle(&mut self, viewer: &mut Viewer, timeout: std::time::Duration) -> bool {
-        let end = std::time::Instant::now() + timeout;
+    pub fn settle(&mut self, viewer: &mut Viewer, timeout: Duration) -> bool {
+        let end = Instant::now() + timeout;
         self.pass(viewer, Vec::new());
         while !viewer.settled() {
             if viewer.render_failure().is_some() {
                 self.pass(viewer, Vec::new());
                 return false;
             }
-            let left = end.saturating_duration_since(std::time::Instant::now());
+            let left = end.saturating_duration_since(Instant::now());
             if left.is_zero() {
                 return false;
             }
-            viewer.wait_for_render(left.min(std::time::Duration::from_millis(200)));
+            viewer.wait_for_render(left.min(Duration::from_millis(200)));
             self.pass(viewer, Vec::new());
         }
         self.pass(viewer, Vec::new());
