@@ -59,6 +59,26 @@ pub struct LightPlan {
     pub not_in_table: Vec<GhostPath>,
 }
 
+/// Each drawn ghost's entrance rectangle in one light's plan: where the next plan of that light
+/// may start its searches ([`PlanOptions::warm_start`]).
+#[derive(Clone, Debug, Default)]
+pub struct WarmStart {
+    entrance: HashMap<GhostPath, Rect>,
+}
+
+impl WarmStart {
+    /// The rectangles of `plan`'s drawn ghosts.
+    pub fn of(plan: &LightPlan) -> WarmStart {
+        WarmStart {
+            entrance: plan
+                .ghosts
+                .iter()
+                .map(|g| (g.path, g.bounds.entrance))
+                .collect(),
+        }
+    }
+}
+
 /// A ghost to render.
 #[derive(Clone, Debug, Serialize)]
 pub struct GhostJob {
@@ -208,6 +228,13 @@ pub struct PlanOptions<'a> {
     /// without them, bit for bit: a plan of fewer bands than tables every [`TABLE_STEP_NM`]
     /// builds each band's tables exactly either way (and the lens keeps those too).
     pub lens_tables: Option<&'a LensTables>,
+    /// The plans of a nearby frame — the same lights on the lens before a small edit, or the
+    /// lights a little moved —, light by light: a ghost traced here starts its search from
+    /// its entrance rectangle there (`bounds::precise_from`: one grid over that rectangle
+    /// widened by a quarter, instead of a search and a refinement over the whole front
+    /// element; the full search runs where the ghost is not found inside it with room to
+    /// spare). Bounds looked up in `precomputed` do not use it.
+    pub warm_start: Option<&'a [WarmStart]>,
 }
 
 impl<'a> PlanOptions<'a> {
@@ -226,6 +253,7 @@ impl<'a> PlanOptions<'a> {
             max_downscale: quality.max_downscale(),
             reflections: ReflectionOrder::Two,
             lens_tables: None,
+            warm_start: None,
         }
     }
 }
@@ -238,7 +266,11 @@ pub fn plan(
     opts: &PlanOptions<'_>,
 ) -> Result<Vec<LightPlan>, GhostRenderError> {
     let planner = Planner::new(system, frame, opts);
-    lights.iter().map(|light| planner.light(light)).collect()
+    lights
+        .iter()
+        .enumerate()
+        .map(|(i, light)| planner.light(light, opts.warm_start.and_then(|w| w.get(i))))
+        .collect()
 }
 
 /// What the plans of a scene's lights share: the lens, frame and options, the ghost paths, the
@@ -314,8 +346,13 @@ impl<'p, 'o> Planner<'p, 'o> {
             .get_or_init(|| InterfaceTableSet::for_system(self.system, BOUNDS_LAMBDA_NM))
     }
 
-    /// One light's plan.
-    fn light(&self, light: &LightSpec) -> Result<LightPlan, GhostRenderError> {
+    /// One light's plan; `warm`: its ghosts' rectangles in a nearby frame
+    /// (`PlanOptions::warm_start`).
+    fn light(
+        &self,
+        light: &LightSpec,
+        warm: Option<&WarmStart>,
+    ) -> Result<LightPlan, GhostRenderError> {
         let (system, opts) = (self.system, self.opts);
         let sampling = SpectralSampling::new(opts.bands, light.spectrum)?;
         let job = LightJob {
@@ -326,7 +363,7 @@ impl<'p, 'o> Planner<'p, 'o> {
             hi: sampling.wavelengths_nm()[opts.bands - 1],
         };
         let (candidates, bounded_out) = self.bound_four(job.theta);
-        let (found, not_in_table) = self.find_bounds(light, job.theta, &candidates)?;
+        let (found, not_in_table) = self.find_bounds(light, job.theta, &candidates, warm)?;
         let on_frame = |b: &GhostBounds| overlaps_frame(&b.sensor.rotated(job.phi), self.frame);
         let dim_below = if opts.cull {
             dim_threshold(
@@ -423,17 +460,19 @@ impl<'p, 'o> Planner<'p, 'o> {
         light: &LightSpec,
         theta: f64,
         candidates: &[GhostPath],
+        warm: Option<&WarmStart>,
     ) -> Result<(Vec<Found>, Vec<GhostPath>), GhostRenderError> {
         let system = self.system;
         let Some(table) = self.opts.precomputed else {
             let reference = self.reference.unwrap_or_default();
+            let start = |path: GhostPath| warm?.entrance.get(&path).copied();
             let found = candidates
                 .par_iter()
                 .map_init(GridTrace::default, |scratch, &path| {
-                    (
-                        path,
-                        bounds::precise(system, path, self.tables(), theta, reference, scratch),
-                    )
+                    let b = bounds::ghost_sequence(system, path, self.tables()).and_then(|seq| {
+                        bounds::precise_from(system, &seq, theta, reference, start(path), scratch)
+                    });
+                    (path, b)
                 })
                 .collect();
             return Ok((found, Vec::new()));
@@ -808,6 +847,57 @@ mod tests {
     fn square(px: f64) -> Rect {
         let h = 0.5 * px * 36.0 / 1920.0;
         Rect::square(0.0, 0.0, h)
+    }
+
+    /// A warm start (a nearby frame's rectangles) finds the ghosts a cold search finds: from
+    /// the same frame, after a small edit of the lens, and from a rectangle far from the ghost
+    /// (the full search then runs). Rectangles agree to the search's refinement.
+    #[test]
+    fn a_warm_start_finds_what_a_cold_search_finds() {
+        let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../lenses/heliar-tronnier.xml");
+        let sys = flarebench_sdk::io::read_lens(&p).unwrap().system;
+        let mut edited = sys.clone();
+        edited.surfaces[0].curvature *= 1.01;
+        let lights = [LightSpec::parse("8,30").unwrap()];
+        let f = Frame::across_film(480, 270, sys.film_width_mm);
+        let plan_of = |sys: &LensSystem, warm: Option<&[WarmStart]>| {
+            let opts = PlanOptions {
+                warm_start: warm,
+                ..PlanOptions::for_quality(Quality::Fast, None)
+            };
+            plan(sys, &lights, &f, &opts).unwrap().remove(0)
+        };
+        let cold = plan_of(&sys, None);
+        assert!(!cold.ghosts.is_empty(), "the Heliar at 8° draws ghosts");
+        let warm = [WarmStart::of(&cold)];
+        let mut far = warm.clone();
+        for r in far[0].entrance.values_mut() {
+            *r = Rect::square(-1e3, -1e3, 1e-3);
+        }
+        let same = |a: &LightPlan, b: &LightPlan, what: &str| {
+            let paths = |p: &LightPlan| p.ghosts.iter().map(|g| g.path).collect::<Vec<_>>();
+            assert_eq!(paths(a), paths(b), "{what}: other ghosts drawn");
+            for (x, y) in a.ghosts.iter().zip(&b.ghosts) {
+                let (x, y) = (x.bounds, y.bounds);
+                let size = y.sensor.width().max(y.sensor.height());
+                let d = (x.sensor.x0 - y.sensor.x0)
+                    .abs()
+                    .max((x.sensor.x1 - y.sensor.x1).abs())
+                    .max((x.sensor.y0 - y.sensor.y0).abs())
+                    .max((x.sensor.y1 - y.sensor.y1).abs());
+                assert!(d <= 0.1 * size, "{what}: {x:?} against {y:?}");
+                let e = (x.energy_share - y.energy_share).abs();
+                assert!(e <= 0.05 * y.energy_share, "{what}: {x:?} against {y:?}");
+            }
+        };
+        same(&plan_of(&sys, Some(&warm)), &cold, "the same frame");
+        same(&plan_of(&sys, Some(&far)), &cold, "a far start");
+        same(
+            &plan_of(&edited, Some(&warm)),
+            &plan_of(&edited, None),
+            "after an edit",
+        );
     }
 
     /// Lens tables (built once per lens) give the same bands as tables built by the plan,

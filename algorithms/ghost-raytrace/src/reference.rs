@@ -179,6 +179,7 @@ pub fn reference_options(reflections: ReflectionOrder) -> PlanOptions<'static> {
         max_downscale: 1,
         reflections,
         lens_tables: None,
+        warm_start: None,
     }
 }
 

@@ -19,14 +19,14 @@ use flarebench_sdk::ghost::{GhostPath, ReflectionOrder};
 use flarebench_sdk::image::HdrImage;
 use flarebench_sdk::starburst::{StarburstCache, StarburstSettings};
 use ghost_raytrace::ghosts::RenderOptions;
-use ghost_raytrace::plan::{self, LensTables, PlanOptions};
+use ghost_raytrace::plan::{self, LensTables, PlanOptions, WarmStart};
 use ghost_raytrace::scene::{LightSpec, Quality};
 use rayon::prelude::*;
 
 use crate::backend::{BackendChoice, BackendReport, GhostBackend};
 use crate::cli::render::{GHOST_HEADROOM_EV, StarburstMode, frame_for, lit_exposure};
 use crate::compose::StarburstSetup;
-use crate::output::{ToneMap, ToneOperator};
+use crate::output::{ToneMap, ToneOperator, ToneTable};
 use crate::report::ErrorReport;
 
 use super::bounds_table::BoundsTabulation;
@@ -96,6 +96,8 @@ pub struct FrameStats {
     /// The plan looked its bounds up in the lens's table (`bounds_table`) instead of tracing
     /// them.
     pub bounds_from_table: bool,
+    /// The plan traced its bounds starting from the last frame's rectangles.
+    pub warm_started: bool,
     pub ghosts_ms: f64,
     pub starburst_ms: f64,
     pub tone_ms: f64,
@@ -372,6 +374,9 @@ struct Renderer {
     lens_tables: Option<LensTables>,
     /// The lens's ghost bounds over the light's angles, built while idle.
     tabulation: Option<BoundsTabulation>,
+    /// The last frame's ghost rectangles, light by light (before `solo`): a fast frame that
+    /// traces its bounds starts each ghost's search there (`PlanOptions::warm_start`).
+    last_plans: Vec<WarmStart>,
     /// Why the backend asked for could not be opened (the CPU is used instead).
     fallback: Option<String>,
 }
@@ -384,6 +389,7 @@ impl Renderer {
                 starbursts: StarburstCache::new(),
                 lens_tables: None,
                 tabulation: None,
+                last_plans: Vec::new(),
                 fallback: None,
             },
             Err(e) => Renderer {
@@ -391,6 +397,7 @@ impl Renderer {
                 starbursts: StarburstCache::new(),
                 lens_tables: None,
                 tabulation: None,
+                last_plans: Vec::new(),
                 fallback: Some(format!("{e:#}; drawing on the CPU")),
             },
         }
@@ -474,11 +481,20 @@ impl Renderer {
         stats.bounds_from_table = table.is_some();
         let mut preset = PlanOptions::for_quality(quality, table);
         preset.lens_tables = self.lens_tables.as_ref();
+        // Without a table, a fast frame's search starts from the last frame's rectangles (the
+        // lens before an edit, the light before a move); the settled frame searches afresh.
+        if stage == Stage::Fast && self.last_plans.len() == scene.lights.len() {
+            preset.warm_start = Some(&self.last_plans);
+            stats.warm_started = table.is_none();
+        }
         let mut plans = if scene.starburst == StarburstMode::Only {
             Vec::new()
         } else {
             plan::plan(sys, &scene.lights, &frame, &preset)?
         };
+        if !plans.is_empty() {
+            self.last_plans = plans.iter().map(WarmStart::of).collect();
+        }
         stats.plan_ms = ms(t);
 
         let t = Instant::now();
@@ -578,18 +594,18 @@ fn ms(t: Instant) -> f64 {
 
 /// `img` tone mapped as the PNG writer maps it (ACES, sRGB) at `exposure_ev`, as RGBA8.
 pub fn tone_rgba(img: &HdrImage, exposure_ev: f32) -> Vec<u8> {
-    let tone = ToneMap {
+    let tone = ToneTable::new(&ToneMap {
         exposure_ev,
         operator: ToneOperator::Aces,
-    };
+    });
     let mut out = vec![0u8; img.pixels.len() * 4];
     out.par_chunks_mut(4 * 4096)
         .zip(img.pixels.par_chunks(4096))
         .for_each(|(o, px)| {
             for (o, p) in o.chunks_exact_mut(4).zip(px) {
-                o[0] = tone.map_channel(p[0]);
-                o[1] = tone.map_channel(p[1]);
-                o[2] = tone.map_channel(p[2]);
+                o[0] = tone.map(p[0]);
+                o[1] = tone.map(p[1]);
+                o[2] = tone.map(p[2]);
                 o[3] = 255;
             }
         });

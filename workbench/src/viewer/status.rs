@@ -29,7 +29,13 @@ pub fn frame_line(f: &FlareFrame) -> String {
         f.quality.name(),
         s.total_ms,
         s.plan_ms,
-        if s.bounds_from_table { " (table)" } else { "" },
+        if s.bounds_from_table {
+            " (table)"
+        } else if s.warm_started {
+            " (warm)"
+        } else {
+            ""
+        },
         s.ghosts_ms,
         s.starburst_ms,
         s.tone_ms,

@@ -34,7 +34,8 @@ fn map_channel(linear: f32) -> f32 {
     if tone.curve == 0u {
         y = (x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14);
     }
-    if x > 3.4028235e38 {
+    // Past about 1.8e19 the ACES ratio's x² overflows; from 1e9 up it clamps to white anyway.
+    if x > 1e9 {
         y = 1.0;
     }
     return round(srgb_encode(y) * 255.0) / 255.0;
