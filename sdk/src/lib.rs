@@ -34,6 +34,7 @@ pub mod frame;
 pub mod fresnel;
 pub mod ghost;
 pub mod glass;
+pub mod hash;
 pub mod image;
 pub mod io;
 pub mod paraxial;

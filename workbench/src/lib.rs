@@ -21,6 +21,8 @@ pub mod precomputed;
 pub mod reference_file;
 pub mod report;
 pub mod sources;
+pub mod stats;
+pub mod sweep;
 pub mod table;
 #[cfg(feature = "window")]
 pub mod viewer;

@@ -154,6 +154,56 @@ pub fn render_into_reusing(
     Ok(stats)
 }
 
+/// Renders every planned ghost alone, in plan order, each into the same black image of the
+/// frame's size, and hands it to `each` with its light's index and its job: what a per-ghost
+/// comparison (`flarebench sweep`) measures. The plans are the same afterwards (their ghost
+/// lists are lent to the single-ghost renders and given back, on an error too).
+pub fn render_each_ghost(
+    system: &LensSystem,
+    aperture: &Aperture,
+    frame: Frame,
+    plans: &mut [LightPlan],
+    options: RenderOptions,
+    mut each: impl FnMut(usize, &GhostJob, &HdrImage),
+) -> Result<(), GhostRenderError> {
+    let all: Vec<Vec<GhostJob>> = plans
+        .iter_mut()
+        .map(|p| std::mem::take(&mut p.ghosts))
+        .collect();
+    let mut image = HdrImage::new(frame.width, frame.height);
+    let mut scratch = RenderScratch::default();
+    let options = RenderOptions {
+        replace: false,
+        ..options
+    };
+    let mut result = Ok(());
+    'lights: for (li, jobs) in all.iter().enumerate() {
+        for job in jobs {
+            plans[li].ghosts.push(job.clone());
+            image.fill_black();
+            let drawn = render_into_reusing(
+                system,
+                aperture,
+                frame,
+                plans,
+                options,
+                &mut scratch,
+                &mut image.pixels,
+            );
+            plans[li].ghosts.clear();
+            if let Err(e) = drawn {
+                result = Err(e);
+                break 'lights;
+            }
+            each(li, job, &image);
+        }
+    }
+    for (p, g) in plans.iter_mut().zip(all) {
+        p.ghosts = g;
+    }
+    result
+}
+
 /// Keeps `coarse` (with their lit `spans`) in `scratch`, and only what a frame of `frame`'s
 /// size can use again (factors 2 to 64, the largest a plan may ask for): a resized frame's
 /// are let go.

@@ -147,6 +147,24 @@ impl LightPlan {
         (kept + dropped, dropped)
     }
 
+    /// The share of the energy of the ghosts that reach the frame that the plan left out as
+    /// too dim ([`DropReason::Dim`], [`DropReason::Bound`]): what the image loses by culling.
+    /// Ghosts off the frame or without light are not part of it, on either side.
+    pub fn culled_share(&self) -> f64 {
+        let kept: f64 = self.ghosts.iter().map(|g| g.energy_share).sum();
+        let culled: f64 = self
+            .dropped
+            .iter()
+            .filter(|d| matches!(d.reason, DropReason::Dim | DropReason::Bound))
+            .map(|d| d.energy_share)
+            .sum();
+        if kept + culled > 0.0 {
+            culled / (kept + culled)
+        } else {
+            0.0
+        }
+    }
+
     /// The four-reflection ghosts' part of the plan (all zero for two-reflection plans).
     pub fn four_reflection_summary(&self) -> FourReflectionSummary {
         let mut s = FourReflectionSummary::default();
@@ -201,6 +219,9 @@ pub struct PlanOptions<'a> {
     pub band_spacing_px: f64,
     /// False keeps every ghost that has light (the reference renderer).
     pub cull: bool,
+    /// The share of the ghosts' energy on the frame that culling may leave out, dimmest ghost
+    /// first ([`dim_threshold`]; the preset's [`Quality::dim_budget`]).
+    pub dim_budget: f64,
     /// Multiplies each ghost's grid.
     pub grid_scale: f64,
     /// Multiplies, with `grid_scale`, the grid of a smooth ghost: one whose bounds' grid is at
@@ -217,6 +238,9 @@ pub struct PlanOptions<'a> {
     /// Largest coarse-frame factor a ghost may be drawn at (1: every ghost at full
     /// resolution, as the reference does).
     pub max_downscale: usize,
+    /// Coarse pixels a ghost's radius must span when it is drawn into a coarse frame
+    /// ([`coarse_factor`]; the preset's [`Quality::coarse_pixels_per_radius`]).
+    pub coarse_pixels_per_radius: f64,
     /// Two-reflection ghosts only (the default), or four-reflection ghosts too. A precomputed
     /// table without some four-reflection ghost that survives the energy bound is not an
     /// error: that ghost's bounds are traced for the light, as without a table.
@@ -246,11 +270,13 @@ impl<'a> PlanOptions<'a> {
             min_bands: 1,
             band_spacing_px: BAND_SPACING_PX,
             cull: true,
+            dim_budget: quality.dim_budget(),
             grid_scale: quality.grid_scale(),
             smooth_grid_scale: quality.smooth_grid_scale(),
             precomputed,
             exact_tables: false,
             max_downscale: quality.max_downscale(),
+            coarse_pixels_per_radius: quality.coarse_pixels_per_radius(),
             reflections: ReflectionOrder::Two,
             lens_tables: None,
             warm_start: None,
@@ -371,7 +397,7 @@ impl<'p, 'o> Planner<'p, 'o> {
                     .iter()
                     .filter_map(|(_, b)| b.as_ref().filter(|b| on_frame(b)))
                     .map(|b| b.energy_share),
-                opts.quality.dim_budget(),
+                opts.dim_budget,
             )
         } else {
             0.0
@@ -532,7 +558,7 @@ impl<'p, 'o> Planner<'p, 'o> {
             grid,
             frame,
             opts.max_downscale,
-            opts.quality.coarse_pixels_per_radius(),
+            opts.coarse_pixels_per_radius,
         );
         // Enough bands that neighbouring ones move the ghost by at most the spacing:
         // m bands over a dispersion of D drawn pixels step D/(m − 1).

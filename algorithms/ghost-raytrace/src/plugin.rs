@@ -1,8 +1,10 @@
 //! The ghost renderer as a plugin (ABI v1): the same [`crate::plan::plan`] and
 //! [`crate::ghosts::render`] the workbench calls directly, behind
 //! [`export_plugin!`](flarebench_sdk::export_plugin). Parameters: `quality` (the preset),
-//! `bands` (wavelength bands, 0 for the preset's), `grid_scale` (0 for the preset's),
-//! `reflections` ("2": two-reflection ghosts, the default; "4": four-reflection ghosts too).
+//! `bands` (wavelength bands, 0 for the preset's), `grid_scale` (0 for the preset's), the
+//! planner's thresholds `smooth_grid_scale`, `dim_budget`, `band_spacing`, `coarse_px` and
+//! `max_downscale` (each 0, or −1 for `dim_budget`, for the preset's), `reflections` ("2":
+//! two-reflection ghosts, the default; "4": four-reflection ghosts too).
 
 use flarebench_sdk::LensSystem;
 use flarebench_sdk::abi::author::{
@@ -53,6 +55,26 @@ pub fn plan_options(params: &Params<'_>) -> Result<PlanOptions<'static>, PluginE
     if scale > 0.0 {
         opts.grid_scale = scale;
     }
+    let smooth = params.get("smooth_grid_scale")?;
+    if smooth > 0.0 {
+        opts.smooth_grid_scale = smooth;
+    }
+    let budget = params.get("dim_budget")?;
+    if budget >= 0.0 {
+        opts.dim_budget = budget;
+    }
+    let spacing = params.get("band_spacing")?;
+    if spacing > 0.0 {
+        opts.band_spacing_px = spacing;
+    }
+    let coarse = params.get("coarse_px")?;
+    if coarse > 0.0 {
+        opts.coarse_pixels_per_radius = coarse;
+    }
+    let downscale = params.get_int("max_downscale")?;
+    if downscale > 0 {
+        opts.max_downscale = downscale as usize;
+    }
     opts.reflections = match params.get_choice("reflections")? {
         0 => ReflectionOrder::Two,
         _ => ReflectionOrder::Four,
@@ -87,6 +109,41 @@ impl FlarePlugin for GhostRaytrace {
                     0.0,
                     16.0,
                     0.0,
+                ),
+                ParamSpec::float(
+                    "smooth_grid_scale",
+                    "multiplier, with grid_scale, on a smooth ghost's grid (0: the preset's 1/0.75/1)",
+                    0.0,
+                    16.0,
+                    0.0,
+                ),
+                ParamSpec::float(
+                    "dim_budget",
+                    "share of the ghosts' energy on the frame the dimmest ghosts may take with them when they are left out (-1: the preset's 0.03/0.001/0.0003; 0 keeps every ghost)",
+                    -1.0,
+                    1.0,
+                    -1.0,
+                ),
+                ParamSpec::float(
+                    "band_spacing",
+                    "drawn pixels by which neighbouring wavelength bands of a ghost may move it (0: the presets' 0.5)",
+                    0.0,
+                    64.0,
+                    0.0,
+                ),
+                ParamSpec::float(
+                    "coarse_px",
+                    "coarse pixels a ghost's radius must span to be drawn into a coarse frame (0: the preset's 32/96/512)",
+                    0.0,
+                    4096.0,
+                    0.0,
+                ),
+                ParamSpec::int(
+                    "max_downscale",
+                    "largest coarse-frame factor (0: the preset's 16/8/8; 1 draws every ghost at full resolution)",
+                    0,
+                    64,
+                    0,
                 ),
                 ParamSpec::choice(
                     "reflections",

@@ -92,14 +92,11 @@ pub fn reference_key(
 fn aperture_key(aperture: &Aperture) -> String {
     match aperture {
         Aperture::Mask(mask) => {
-            let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+            let mut h = flarebench_sdk::hash::Fnv1a::new();
             for v in mask.data() {
-                for b in v.to_le_bytes() {
-                    h ^= u64::from(b);
-                    h = h.wrapping_mul(0x0100_0000_01b3);
-                }
+                h.write(&v.to_le_bytes());
             }
-            format!("mask {}x{} {h:016x}", mask.width(), mask.height())
+            format!("mask {}x{} {}", mask.width(), mask.height(), h.hex())
         }
         other => format!("{other:?}"),
     }
@@ -126,6 +123,38 @@ pub fn reference_image_of_order(
 ) -> Result<HdrImage, GhostRenderError> {
     let plans = reference_plans_of_order(system, lights, &frame, 1.0, reflections)?;
     Ok(ghosts::render_with(system, aperture, frame, &plans, BAND_BY_BAND)?.0)
+}
+
+/// The reference ghost by ghost: each of its ghosts rendered alone
+/// ([`ghosts::render_each_ghost`]) and handed to `each` with its light's index and path; returns
+/// their sum, the reference image (equal to [`reference_image_of_order`]'s but for the order
+/// of the f32 additions).
+pub fn reference_by_ghost(
+    system: &LensSystem,
+    aperture: &Aperture,
+    frame: Frame,
+    lights: &[LightSpec],
+    reflections: ReflectionOrder,
+    mut each: impl FnMut(usize, &flarebench_sdk::ghost::GhostPath, &HdrImage),
+) -> Result<HdrImage, GhostRenderError> {
+    let mut plans = reference_plans_of_order(system, lights, &frame, 1.0, reflections)?;
+    let mut sum = HdrImage::new(frame.width, frame.height);
+    ghosts::render_each_ghost(
+        system,
+        aperture,
+        frame,
+        &mut plans,
+        BAND_BY_BAND,
+        |li, job, img| {
+            for (o, p) in sum.pixels.iter_mut().zip(&img.pixels) {
+                for c in 0..3 {
+                    o[c] += p[c];
+                }
+            }
+            each(li, &job.path, img);
+        },
+    )?;
+    Ok(sum)
 }
 
 /// The reference with `density` times as many grid vertices a side (the convergence check).
@@ -172,11 +201,13 @@ pub fn reference_options(reflections: ReflectionOrder) -> PlanOptions<'static> {
         min_bands: REFERENCE_MIN_BANDS,
         band_spacing_px: REFERENCE_BAND_SPACING_PX,
         cull: false,
+        dim_budget: 0.0,
         grid_scale: REFERENCE_GRID_SCALE,
         smooth_grid_scale: 1.0,
         precomputed: None,
         exact_tables: true,
         max_downscale: 1,
+        coarse_pixels_per_radius: Quality::High.coarse_pixels_per_radius(),
         reflections,
         lens_tables: None,
         warm_start: None,

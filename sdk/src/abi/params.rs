@@ -51,6 +51,29 @@ impl ParamInfo {
     }
 }
 
+/// A plugin's own description of a parameter, as a host sees it: what a host that links a
+/// plugin's crate (rather than loading its library) parses `key=value` text against.
+impl From<&crate::abi::author::ParamSpec> for ParamInfo {
+    fn from(p: &crate::abi::author::ParamSpec) -> Self {
+        use crate::abi::author::ParamType;
+        ParamInfo {
+            name: p.name.to_string(),
+            help: p.help.to_string(),
+            kind: match p.ty {
+                ParamType::Float => ParamKind::Float,
+                ParamType::Int => ParamKind::Int,
+                ParamType::Bool => ParamKind::Bool,
+                ParamType::Choice(names) => {
+                    ParamKind::Choice(names.iter().map(|n| n.to_string()).collect())
+                }
+            },
+            min: p.min,
+            max: p.max,
+            default: p.default,
+        }
+    }
+}
+
 /// A `key=value` that does not fit the plugin's parameters.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum ParamError {

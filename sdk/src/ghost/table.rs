@@ -76,13 +76,7 @@ impl Default for TableOptions {
 
 /// FNV-1a (64 bit) of the lens's canonical XML, as hex.
 pub fn fingerprint(system: &LensSystem) -> String {
-    let text = crate::io::write_xml(system);
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for b in text.bytes() {
-        h ^= u64::from(b);
-        h = h.wrapping_mul(0x0100_0000_01b3);
-    }
-    format!("{h:016x}")
+    crate::hash::fnv1a_hex(crate::io::write_xml(system).as_bytes())
 }
 
 /// The largest angle a table covers by default (degrees): half the film diagonal's field (at

@@ -31,6 +31,7 @@ use crate::backend::{BackendChoice, BackendReport, GhostBackend};
 use crate::compose::StarburstSetup;
 use crate::lens_library;
 use crate::precomputed::load_precomputed;
+use crate::stats::median;
 use crate::table::Table;
 use flarebench_sdk::starburst::{StarburstCache, StarburstSettings};
 
@@ -172,16 +173,6 @@ pub struct BenchRow {
     pub error_height: Option<usize>,
     pub relative_rmse: Option<f64>,
     pub energy_error: Option<f64>,
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
 }
 
 pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
@@ -453,12 +444,12 @@ impl Case<'_> {
             last = Some(plans);
         }
         Ok(Timed {
-            plan_ms: median(plan_ms),
-            render_ms: median(render_ms),
-            frame_ms: median(frame_ms),
-            mesh_ms: (!mesh_ms.is_empty()).then(|| median(mesh_ms)),
-            gpu_ms: (!gpu_ms.is_empty()).then(|| median(gpu_ms)),
-            starburst_ms: (!starburst_ms.is_empty()).then(|| median(starburst_ms)),
+            plan_ms: median(&plan_ms),
+            render_ms: median(&render_ms),
+            frame_ms: median(&frame_ms),
+            mesh_ms: (!mesh_ms.is_empty()).then(|| median(&mesh_ms)),
+            gpu_ms: (!gpu_ms.is_empty()).then(|| median(&gpu_ms)),
+            starburst_ms: (!starburst_ms.is_empty()).then(|| median(&starburst_ms)),
             plans: last.expect("at least one run"),
             report: backend.report().clone(),
         })

@@ -24,6 +24,8 @@ use crate::output::{ToneMap, ToneOperator, save_image};
 use crate::plugin_dirs;
 use crate::reference_file::{ReferenceSource, reference_for};
 use crate::report::ErrorReport;
+use crate::stats::median;
+use crate::sweep::points::split_algo as split_spec;
 use crate::table::Table;
 use flarebench_sdk::ghost::ReflectionOrder;
 
@@ -115,20 +117,6 @@ fn ms(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
 }
 
-/// The median of `v` (the mean of the middle two for an even count).
-fn median(v: &[f64]) -> f64 {
-    let mut s = v.to_vec();
-    s.sort_by(f64::total_cmp);
-    let n = s.len();
-    if n == 0 {
-        f64::NAN
-    } else if n % 2 == 1 {
-        s[n / 2]
-    } else {
-        0.5 * (s[n / 2 - 1] + s[n / 2])
-    }
-}
-
 /// Resets the process's peak resident set size (Linux ≥ 4.0: `5` to `/proc/self/clear_refs`).
 fn reset_peak_rss() -> bool {
     std::fs::write("/proc/self/clear_refs", "5").is_ok()
@@ -140,11 +128,6 @@ fn peak_rss_mib() -> Option<f64> {
     let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
     let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kib / 1024.0)
-}
-
-/// `NAME[:key=value,...]` → (name or path, parameter text).
-fn split_spec(spec: &str) -> (&str, &str) {
-    spec.split_once(':').unwrap_or((spec, ""))
 }
 
 /// Runs one algorithm: load, prepare, `runs` renders, its mesh drawn by `backend`.
@@ -456,12 +439,6 @@ fn text(r: &CompareReport) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn median_of_odd_and_even_counts() {
-        assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);
-        assert_eq!(median(&[4.0, 1.0, 3.0, 2.0]), 2.5);
-    }
 
     #[test]
     fn algorithm_specs_split_at_the_first_colon() {

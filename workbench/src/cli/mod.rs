@@ -10,6 +10,7 @@ mod info;
 mod plugins;
 mod precompute;
 pub(crate) mod render;
+mod sweep;
 mod trace;
 #[cfg(feature = "window")]
 mod view;
@@ -57,6 +58,9 @@ pub enum Command {
     Compare(compare::CompareArgs),
     /// Flare algorithm plugins: `plugins list`.
     Plugins(plugins::PluginsArgs),
+    /// Error against run time over algorithms, presets and the planner's thresholds: CSV,
+    /// JSON, plots with the Pareto front, contact sheets and an index.html.
+    Sweep(sweep::SweepArgs),
 }
 
 /// Runs the command line; errors are printed with their causes.
@@ -72,6 +76,7 @@ pub fn main() -> ExitCode {
         Command::Plugins(a) => plugins::run(a, cli.quiet),
         Command::Compare(a) => compare::run(a, cli.quiet),
         Command::Bench(a) => bench::run(a, cli.quiet),
+        Command::Sweep(a) => sweep::run(a, cli.quiet),
         #[cfg(feature = "tui")]
         Command::Edit(a) => edit::run(a, cli.quiet),
         #[cfg(feature = "window")]

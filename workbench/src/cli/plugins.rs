@@ -143,9 +143,11 @@ fn list(args: &ListArgs) -> anyhow::Result<()> {
                 if let Some(r) = reason {
                     println!("  ({r})");
                 }
+                // Names in a column as wide as the longest (at least 12).
+                let w = e.params.iter().map(|p| p.name.len()).max().unwrap_or(0).max(12);
                 for p in &e.params {
                     println!(
-                        "  {:<12} {:<28} default {:<8} {}",
+                        "  {:<w$} {:<28} default {:<8} {}",
                         p.name,
                         p.describe_type(),
                         p.format_value(p.default),

@@ -1,0 +1,441 @@
+//! `flarebench sweep`: error against run time over lenses, lights, algorithms, presets and the
+//! planner's thresholds, written as CSV, JSON, plots, contact sheets and an `index.html`
+//! (`crate::sweep`; docs/accuracy.md § Sweeps).
+
+use std::collections::HashMap;
+use std::path::PathBuf;
+use std::time::{Instant, SystemTime, UNIX_EPOCH};
+
+use anyhow::Context;
+use clap::Args;
+use flarebench_sdk::abi::params::{ParamInfo, parse_values};
+use flarebench_sdk::ghost::ReflectionOrder;
+use ghost_raytrace::plan::LensTables;
+use ghost_raytrace::reference::reference_key;
+use ghost_raytrace::scene::{LightSpec, Quality};
+use indicatif::{ProgressBar, ProgressStyle};
+use serde::Serialize;
+
+use super::render::{IrisArgs, auto_exposure, frame_for, parse_size};
+use crate::backend::{BackendChoice, GhostBackend};
+use crate::lens_library;
+use crate::output::{ToneMap, ToneOperator, save_image};
+use crate::sweep::measure::{self, Scene1, params_of};
+use crate::sweep::points::{self, Point, Vary, split_algo};
+use crate::sweep::sheet::{THUMB_WIDTH, Tile, contact_sheet, thumbnail};
+use crate::sweep::store::Store;
+use crate::sweep::{CaseInfo, CaseResult, aperture_text, plot, report};
+use crate::table::Table;
+
+#[derive(Debug, Args)]
+pub struct SweepArgs {
+    /// Lens files or bundled lens names.
+    #[arg(default_values_t = ["heliar-tronnier".to_string(), "nikon-zoom-short".to_string()])]
+    pub lenses: Vec<String>,
+    /// A light: THETA,PHI[,INTENSITY[,KELVIN]] (degrees; repeatable: each light is a case of
+    /// its own, with its own plot). Default: 10,30.
+    #[arg(long = "light", value_parser = LightSpec::parse)]
+    pub lights: Vec<LightSpec>,
+    /// Quality presets of the built-in renderer (ghost-raytrace), comma separated: one series.
+    #[arg(long, value_delimiter = ',')]
+    pub quality: Option<Vec<Quality>>,
+    /// An algorithm, NAME[:key=value,…] (a plugin name or library path; `ghost-raytrace` is
+    /// run in-process, so its ghosts are measured one by one too). Repeatable; each is a
+    /// series, and the base of `--vary`.
+    #[arg(long = "algo")]
+    pub algos: Vec<String>,
+    /// Vary a parameter, KEY=a,b,c: a series per algorithm that has the parameter (the
+    /// default preset of ghost-raytrace without --algo). Repeatable.
+    #[arg(long = "vary", value_parser = Vary::parse)]
+    pub vary: Vec<Vary>,
+    /// Vary the --vary parameters together (every combination) instead of one at a time.
+    #[arg(long)]
+    pub product: bool,
+    /// Frame size, WxH (the reference is rendered at this size too).
+    #[arg(long, default_value = "480x270", value_parser = parse_size)]
+    pub size: (usize, usize),
+    /// Timed runs per cell, after one untimed warm-up run (the median is plotted).
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    pub runs: u32,
+    #[command(flatten)]
+    pub iris: IrisArgs,
+    /// Where the ghosts are drawn: auto (a hardware GPU if there is one, else the CPU), cpu
+    /// or gpu. Ghosts one by one are always measured on the CPU.
+    #[arg(long, value_enum, default_value_t = BackendChoice::Auto)]
+    pub backend: BackendChoice,
+    /// Also load this plugin library (repeatable).
+    #[arg(long = "plugin")]
+    pub plugins: Vec<PathBuf>,
+    /// Redo every cell and reference instead of reusing those the directory holds.
+    #[arg(long)]
+    pub fresh: bool,
+    /// Also print the results as JSON.
+    #[arg(long)]
+    pub json: bool,
+    /// The sweep's directory (created; results.csv, per_ghost.csv, results.json,
+    /// plot-*.svg/png, contact-*.png, index.html, and the cache of cells and references).
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+/// `results.json`.
+#[derive(Serialize)]
+struct SweepReport<'a> {
+    command: &'a str,
+    date: &'a str,
+    took_s: f64,
+    cells_run: usize,
+    cells_reused: usize,
+    references_rendered: usize,
+    cases: &'a [CaseResult],
+}
+
+/// Today's date (UTC), `YYYY-MM-DD`, from the system clock.
+fn today() -> String {
+    let days = SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs() / 86_400) as i64;
+    // Days since 1970-01-01 to a proleptic Gregorian date (eras of 400 years).
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = doy - (153 * mp + 2) / 5 + 1;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 };
+    let y = yoe + era * 400 + i64::from(m <= 2);
+    format!("{y:04}-{m:02}-{d:02}")
+}
+
+pub fn run(args: &SweepArgs, quiet: bool) -> anyhow::Result<()> {
+    let started = Instant::now();
+    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    // Parameters of each algorithm, asked once (a plugin is loaded to tell them).
+    let mut known: HashMap<String, Vec<ParamInfo>> = HashMap::new();
+    let mut params = |name: &str| -> anyhow::Result<Vec<ParamInfo>> {
+        if let Some(p) = known.get(name) {
+            return Ok(p.clone());
+        }
+        let p = params_of(name, &args.plugins)?;
+        known.insert(name.to_string(), p.clone());
+        Ok(p)
+    };
+    let pts = points::build(
+        args.quality.as_deref(),
+        &args.algos,
+        &args.vary,
+        args.product,
+        &mut params,
+    )?;
+    let lights = if args.lights.is_empty() {
+        vec![LightSpec::parse("10,30").map_err(anyhow::Error::msg)?]
+    } else {
+        args.lights.clone()
+    };
+    let aperture = args.iris.aperture()?;
+    if args.fresh {
+        for d in ["cells", "references"] {
+            let p = args.output.join(d);
+            if p.exists() {
+                std::fs::remove_dir_all(&p).with_context(|| format!("removing {}", p.display()))?;
+            }
+        }
+    }
+    let store = Store::open(&args.output)?;
+    let mut backend = GhostBackend::open(args.backend)?;
+    let backend_name = match &backend.report().adapter {
+        Some(a) => format!("gpu ({a})"),
+        None => backend.report().backend.clone(),
+    };
+    let runs = args.runs as usize;
+    let show = !quiet && !args.json;
+
+    let total = (args.lenses.len() * lights.len() * pts.len()) as u64;
+    let bar = if show {
+        ProgressBar::new(total).with_style(
+            ProgressStyle::with_template(
+                "{msg:40} [{bar:30}] {pos}/{len} cells, {elapsed} (eta {eta})",
+            )
+            .expect("valid template")
+            .progress_chars("=> "),
+        )
+    } else {
+        ProgressBar::hidden()
+    };
+    let (mut run_count, mut reused, mut references) = (0usize, 0usize, 0usize);
+    let mut cases = Vec::new();
+    for lens_arg in &args.lenses {
+        let sys = lens_library::load(lens_arg, !show)?.system;
+        let tables = LensTables::new(&sys);
+        let frame = frame_for(&sys, args.size);
+        for light in &lights {
+            let case = CaseInfo {
+                lens: sys.name.clone(),
+                lens_arg: lens_arg.clone(),
+                theta_deg: light.theta_deg,
+                phi_deg: light.phi_deg,
+                width: frame.width,
+                height: frame.height,
+                aperture: aperture_text(&aperture),
+            };
+            let scene = Scene1 {
+                system: &sys,
+                tables: &tables,
+                aperture: &aperture,
+                frame,
+                light,
+            };
+            let ref_key = reference_key(
+                &sys,
+                &aperture,
+                &frame,
+                std::slice::from_ref(light),
+                ReflectionOrder::Two,
+            );
+            let (reference, ref_img) = match store.load_reference(&ref_key) {
+                Some(r) => r,
+                None => {
+                    bar.set_message(format!("{}: reference", case.lens));
+                    let (mut rec, img) = measure::reference(&scene)?;
+                    rec.key = ref_key.clone();
+                    store.save_reference(&rec, &img, &thumbnail(&img, THUMB_WIDTH))?;
+                    references += 1;
+                    (rec, img)
+                }
+            };
+            let mut cells = Vec::new();
+            let mut thumbs = Vec::new();
+            for p in &pts {
+                bar.set_message(format!("{}: {}", case.lens, p.label));
+                let key = cell_key(&ref_key, p, &mut params, &backend_name, runs)?;
+                let cell = match store.load_cell(&key) {
+                    Some(c) => {
+                        reused += 1;
+                        c
+                    }
+                    None => {
+                        run_count += 1;
+                        let measured =
+                            measure::measure(&scene, p, runs, &mut backend, &args.plugins)
+                                .and_then(|m| {
+                                    let c = measure::finish(
+                                        key.clone(),
+                                        p,
+                                        &backend_name,
+                                        &m,
+                                        &reference,
+                                        &ref_img,
+                                    )?;
+                                    store.save_cell(&c, Some(&thumbnail(&m.image, THUMB_WIDTH)))?;
+                                    Ok(c)
+                                });
+                        match measured {
+                            Ok(c) => c,
+                            Err(e) => {
+                                bar.suspend(|| {
+                                    if show {
+                                        eprintln!("{}: {}: {e:#}", case.lens, p.algo)
+                                    }
+                                });
+                                measure::failed(key.clone(), p, &backend_name, format!("{e:#}"))
+                            }
+                        }
+                    }
+                };
+                thumbs.push((cell.failure.is_none()).then(|| Store::cell_thumbnail(&key)));
+                cells.push(cell);
+                bar.inc(1);
+            }
+            let result = CaseResult {
+                exposure_ev: auto_exposure(&ref_img),
+                reference_thumbnail: Some(Store::reference_thumbnail(&ref_key)),
+                case,
+                reference,
+                cells,
+                thumbnails: thumbs,
+            };
+            write_case_files(&store, &result)?;
+            cases.push(result);
+        }
+    }
+    bar.finish_and_clear();
+
+    let took_s = started.elapsed().as_secs_f64();
+    let date = today();
+    let out = &args.output;
+    let write = |name: &str, bytes: &[u8]| -> anyhow::Result<()> {
+        let p = out.join(name);
+        flarebench_sdk::io::write_atomically(&p, bytes)
+            .with_context(|| format!("writing {}", p.display()))
+    };
+    write("results.csv", report::results_csv(&cases).as_bytes())?;
+    write("per_ghost.csv", report::per_ghost_csv(&cases).as_bytes())?;
+    let json = serde_json::to_string_pretty(&SweepReport {
+        command: &command,
+        date: &date,
+        took_s,
+        cells_run: run_count,
+        cells_reused: reused,
+        references_rendered: references,
+        cases: &cases,
+    })?;
+    write("results.json", json.as_bytes())?;
+    write(
+        "index.html",
+        report::index_html(&cases, &command, took_s, &date).as_bytes(),
+    )?;
+    let failed = cases
+        .iter()
+        .flat_map(|c| &c.cells)
+        .filter(|c| c.failure.is_some())
+        .count();
+    let all = cases.iter().map(|c| c.cells.len()).sum::<usize>();
+    let outcome = if failed > 0 {
+        Err(anyhow::anyhow!(
+            "{failed} of {all} cells failed (their reasons are in the results); the rest were written to {}",
+            out.display()
+        ))
+    } else {
+        Ok(())
+    };
+    if args.json {
+        println!("{json}");
+        return outcome;
+    }
+    if quiet {
+        return outcome;
+    }
+    for case in &cases {
+        println!("{}", case.case.title());
+        let front = case.pareto();
+        let mut t = Table::new(&[
+            "series",
+            "point",
+            "median ms",
+            "min–max ms",
+            "rel RMSE",
+            "energy",
+            "ghosts",
+            "dropped",
+            "front",
+        ]);
+        let pct = |v: f64| {
+            if v.is_finite() {
+                format!("{:.2}%", 100.0 * v)
+            } else {
+                "—".to_string()
+            }
+        };
+        for (i, c) in case.cells.iter().enumerate() {
+            t.row(vec![
+                c.series.clone(),
+                c.label.clone(),
+                format!("{:.1}", c.median_ms),
+                format!("{:.1}–{:.1}", c.min_ms, c.max_ms),
+                pct(c.relative_rmse),
+                pct(c.energy_error),
+                match c.ghosts_total {
+                    Some(n) => format!("{}/{n}", c.ghosts_drawn),
+                    None => c.ghosts_drawn.to_string(),
+                },
+                c.dropped_energy_measured.map_or("—".to_string(), pct),
+                if let Some(f) = &c.failure {
+                    format!("failed: {f}")
+                } else if front.contains(&i) {
+                    "*".to_string()
+                } else {
+                    String::new()
+                },
+            ]);
+        }
+        print!("{}", t.render());
+    }
+    println!(
+        "{} cells run, {} reused, {} references rendered; {:.1} s; backend {backend_name}; medians of {runs} runs; written to {}",
+        run_count,
+        reused,
+        references,
+        took_s,
+        out.join("index.html").display()
+    );
+    outcome
+}
+
+/// Everything a cell depends on: its scene (the reference's key), the algorithm with every
+/// parameter's value, the backend, the runs and the workbench's version.
+fn cell_key(
+    reference_key: &str,
+    p: &Point,
+    params: &mut impl FnMut(&str) -> anyhow::Result<Vec<ParamInfo>>,
+    backend: &str,
+    runs: usize,
+) -> anyhow::Result<String> {
+    let (name, text) = split_algo(&p.algo);
+    let info = params(name)?;
+    let values = parse_values(&info, text)?;
+    let canonical: Vec<String> = info
+        .iter()
+        .zip(&values)
+        .map(|(i, &v)| format!("{}={}", i.name, i.format_value(v)))
+        .collect();
+    Ok(format!(
+        "flarebench-sweep {}; {reference_key}; algo {name} {}; backend {backend}; runs {runs}",
+        env!("CARGO_PKG_VERSION"),
+        canonical.join(",")
+    ))
+}
+
+/// The case's plot and contact sheet.
+fn write_case_files(store: &Store, case: &CaseResult) -> anyhow::Result<()> {
+    let slug = case.case.slug();
+    plot::save(case, &store.root().join(format!("plot-{slug}")))?;
+    let front = case.pareto();
+    let reference = case
+        .reference_thumbnail
+        .as_deref()
+        .and_then(|r| store.read_thumbnail(r));
+    let thumbs: Vec<_> = case
+        .thumbnails
+        .iter()
+        .map(|t| t.as_deref().and_then(|t| store.read_thumbnail(t)))
+        .collect();
+    let (w, h) = reference
+        .as_ref()
+        .map_or((THUMB_WIDTH, THUMB_WIDTH * 9 / 16), |r| (r.width, r.height));
+    let mut tiles = vec![Tile {
+        image: reference.as_ref(),
+        lines: [
+            "reference".to_string(),
+            format!("{:.1} s", case.reference.render_ms / 1e3),
+        ],
+    }];
+    for (i, (c, t)) in case.cells.iter().zip(&thumbs).enumerate() {
+        tiles.push(Tile {
+            image: t.as_ref(),
+            lines: [
+                c.label.clone(),
+                if c.failure.is_some() {
+                    "failed".to_string()
+                } else {
+                    format!(
+                        "{}{:.1} ms {:.2}%",
+                        if front.contains(&i) { "* " } else { "" },
+                        c.median_ms,
+                        100.0 * c.relative_rmse
+                    )
+                },
+            ],
+        });
+    }
+    let white = 16.0 * (-case.exposure_ev).exp2();
+    let sheet = contact_sheet(&tiles, 5, w, h, white);
+    save_image(
+        &sheet,
+        &store.root().join(format!("contact-{slug}.png")),
+        &ToneMap {
+            exposure_ev: case.exposure_ev,
+            operator: ToneOperator::Aces,
+        },
+    )
+}
