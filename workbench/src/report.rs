@@ -63,8 +63,12 @@ pub struct LightReport {
     pub ghosts_dropped: usize,
     /// Sum of the ghosts' energy shares (of the direct image).
     pub ghost_energy_share: f64,
-    /// Part of that left out by planning (fraction of the ghost energy).
+    /// Part of that left out by planning (fraction of the ghost energy): ghosts off the
+    /// frame, without light, or culled as dim.
     pub dropped_energy_fraction: f64,
+    /// What the image loses by culling: the share of the frame's ghost energy in the ghosts
+    /// left out as dim (`LightPlan::culled_share`).
+    pub culled_energy_fraction: f64,
     pub bands: usize,
     pub ghosts: Vec<GhostLine>,
     /// Every ghost left out, four-reflection ghosts culled by their energy bound included
@@ -130,6 +134,7 @@ impl LightReport {
             ghosts_dropped: lp.dropped.len(),
             ghost_energy_share: total,
             dropped_energy_fraction: if total > 0.0 { dropped / total } else { 0.0 },
+            culled_energy_fraction: lp.culled_share,
             bands: lp.sampled,
             ghosts,
             dropped: lp
@@ -173,13 +178,14 @@ impl RenderReport {
         s += &self.backend.text();
         for (i, l) in self.lights.iter().enumerate() {
             s += &format!(
-                "light {i} at θ {}°, φ {}°: {} of {} ghosts traced, {} left out ({:.3}% of the ghost energy); ghosts carry {:.3e} of the direct image's energy\n",
+                "light {i} at θ {}°, φ {}°: {} of {} ghosts traced, {} left out ({:.3}% of the ghost energy; culling took {:.3}% of the frame's); ghosts carry {:.3e} of the direct image's energy\n",
                 l.theta_deg,
                 l.phi_deg,
                 l.ghosts_traced,
                 l.ghosts_total,
                 l.ghosts_dropped,
                 100.0 * l.dropped_energy_fraction,
+                100.0 * l.culled_energy_fraction,
                 l.ghost_energy_share
             );
             if let Some(f) = &l.four_reflections {

@@ -31,6 +31,7 @@ fn alone(lp: &LightPlan, g: usize) -> Vec<LightPlan> {
         ghosts: vec![lp.ghosts[g].clone()],
         dropped: Vec::new(),
         not_in_table: Vec::new(),
+        culled_share: 0.0,
     }]
 }
 

@@ -154,54 +154,103 @@ pub fn render_into_reusing(
     Ok(stats)
 }
 
-/// Renders every planned ghost alone, in plan order, each into the same black image of the
-/// frame's size, and hands it to `each` with its light's index and its job: what a per-ghost
-/// comparison (`flarebench sweep`) measures. The plans are the same afterwards (their ghost
-/// lists are lent to the single-ghost renders and given back, on an error too).
-pub fn render_each_ghost(
+/// Renders every planned ghost alone, each into a black image of the frame's size, and hands
+/// it to `each` with its light's index and its job: what a per-ghost comparison (`flarebench
+/// sweep`) measures. Ghosts are rendered in parallel; returns what `each` returned, in plan
+/// order, and the sum of the ghosts' images (the frame's image but for the order of the f32
+/// additions).
+pub fn render_each_ghost<R: Send>(
     system: &LensSystem,
     aperture: &Aperture,
     frame: Frame,
-    plans: &mut [LightPlan],
+    plans: &[LightPlan],
     options: RenderOptions,
-    mut each: impl FnMut(usize, &GhostJob, &HdrImage),
-) -> Result<(), GhostRenderError> {
-    let all: Vec<Vec<GhostJob>> = plans
-        .iter_mut()
-        .map(|p| std::mem::take(&mut p.ghosts))
-        .collect();
-    let mut image = HdrImage::new(frame.width, frame.height);
-    let mut scratch = RenderScratch::default();
+    each: impl Fn(usize, &GhostJob, &HdrImage) -> R + Sync,
+) -> Result<(Vec<R>, HdrImage), GhostRenderError> {
     let options = RenderOptions {
         replace: false,
         ..options
     };
-    let mut result = Ok(());
-    'lights: for (li, jobs) in all.iter().enumerate() {
-        for job in jobs {
-            plans[li].ghosts.push(job.clone());
-            image.fill_black();
-            let drawn = render_into_reusing(
-                system,
-                aperture,
-                frame,
-                plans,
-                options,
-                &mut scratch,
-                &mut image.pixels,
-            );
-            plans[li].ghosts.clear();
-            if let Err(e) = drawn {
-                result = Err(e);
-                break 'lights;
-            }
-            each(li, job, &image);
+    // Each light's plan without its ghosts: a ghost's own plan is this with the ghost added.
+    let empty: Vec<LightPlan> = plans
+        .iter()
+        .map(|p| LightPlan {
+            ghosts: Vec::new(),
+            dropped: Vec::new(),
+            light: p.light.clone(),
+            bands: p.bands.clone(),
+            not_in_table: Vec::new(),
+            ..*p
+        })
+        .collect();
+    let jobs: Vec<(usize, usize, &GhostJob)> = plans
+        .iter()
+        .enumerate()
+        .flat_map(|(li, p)| p.ghosts.iter().map(move |g| (li, g)))
+        .enumerate()
+        .map(|(i, (li, g))| (i, li, g))
+        .collect();
+    type Acc<R> = (Option<HdrImage>, Vec<(usize, R)>);
+    let new_acc = || -> Result<Acc<R>, GhostRenderError> { Ok((None, Vec::new())) };
+    let (sum, mut out) = jobs
+        .par_iter()
+        .fold(
+            || {
+                (
+                    new_acc(),
+                    HdrImage::new(frame.width, frame.height),
+                    RenderScratch::default(),
+                )
+            },
+            |(acc, mut image, mut scratch), &(i, li, job)| {
+                let acc = acc.and_then(|(sum, mut out)| {
+                    let mut plan = empty[li].clone();
+                    plan.ghosts.push(job.clone());
+                    image.fill_black();
+                    render_into_reusing(
+                        system,
+                        aperture,
+                        frame,
+                        std::slice::from_ref(&plan),
+                        options,
+                        &mut scratch,
+                        &mut image.pixels,
+                    )?;
+                    out.push((i, each(li, job, &image)));
+                    let mut sum = sum.unwrap_or_else(|| HdrImage::new(frame.width, frame.height));
+                    add_into(&mut sum, &image);
+                    Ok((Some(sum), out))
+                });
+                (acc, image, scratch)
+            },
+        )
+        .map(|(acc, _, _)| acc)
+        .reduce(new_acc, |a, b| {
+            let ((sa, mut oa), (sb, ob)) = (a?, b?);
+            oa.extend(ob);
+            let sum = match (sa, sb) {
+                (Some(mut x), Some(y)) => {
+                    add_into(&mut x, &y);
+                    Some(x)
+                }
+                (x, y) => x.or(y),
+            };
+            Ok((sum, oa))
+        })?;
+    out.sort_by_key(|(i, _)| *i);
+    Ok((
+        out.into_iter().map(|(_, r)| r).collect(),
+        sum.unwrap_or_else(|| HdrImage::new(frame.width, frame.height)),
+    ))
+}
+
+/// `sum += img`, pixel by pixel.
+fn add_into(sum: &mut HdrImage, img: &HdrImage) {
+    for (o, p) in sum.pixels.iter_mut().zip(&img.pixels) {
+        for c in 0..3 {
+            o[c] += p[c];
         }
     }
-    for (p, g) in plans.iter_mut().zip(all) {
-        p.ghosts = g;
-    }
-    result
 }
 
 /// Keeps `coarse` (with their lit `spans`) in `scratch`, and only what a frame of `frame`'s

@@ -40,7 +40,7 @@ use crate::scene::{LightSpec, Quality};
 pub const BOUNDS_LAMBDA_NM: f64 = 550.0;
 
 /// What a light needs.
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub struct LightPlan {
     pub light: LightSpec,
     /// Every wavelength some ghost is traced at (the bins of the light's spectral sampling
@@ -57,6 +57,11 @@ pub struct LightPlan {
     /// that straddle the stop, four-reflection ghosts of a table made without them), whose
     /// bounds were traced for this light as without a table. Empty without a table.
     pub not_in_table: Vec<GhostPath>,
+    /// The share of the frame's ghost energy the plan left out as too dim: the on-frame
+    /// energy ([`on_frame_share`]) of the ghosts dropped as [`DropReason::Dim`] and
+    /// [`DropReason::Bound`], over that of every ghost that reaches the frame. What the image
+    /// loses by culling; ghosts off the frame or without light take nothing from it.
+    pub culled_share: f64,
 }
 
 /// Each drawn ghost's entrance rectangle in one light's plan: where the next plan of that light
@@ -145,24 +150,6 @@ impl LightPlan {
         let kept: f64 = self.ghosts.iter().map(|g| g.energy_share).sum();
         let dropped: f64 = self.dropped.iter().map(|d| d.energy_share).sum();
         (kept + dropped, dropped)
-    }
-
-    /// The share of the energy of the ghosts that reach the frame that the plan left out as
-    /// too dim ([`DropReason::Dim`], [`DropReason::Bound`]): what the image loses by culling.
-    /// Ghosts off the frame or without light are not part of it, on either side.
-    pub fn culled_share(&self) -> f64 {
-        let kept: f64 = self.ghosts.iter().map(|g| g.energy_share).sum();
-        let culled: f64 = self
-            .dropped
-            .iter()
-            .filter(|d| matches!(d.reason, DropReason::Dim | DropReason::Bound))
-            .map(|d| d.energy_share)
-            .sum();
-        if kept + culled > 0.0 {
-            culled / (kept + culled)
-        } else {
-            0.0
-        }
     }
 
     /// The four-reflection ghosts' part of the plan (all zero for two-reflection plans).
@@ -391,17 +378,19 @@ impl<'p, 'o> Planner<'p, 'o> {
         let (candidates, bounded_out) = self.bound_four(job.theta);
         let (found, not_in_table) = self.find_bounds(light, job.theta, &candidates, warm)?;
         let on_frame = |b: &GhostBounds| overlaps_frame(&b.sensor.rotated(job.phi), self.frame);
+        let visible = |b: &GhostBounds| on_frame_share(b, job.phi, self.frame);
         let dim_below = if opts.cull {
             dim_threshold(
                 found
                     .iter()
                     .filter_map(|(_, b)| b.as_ref().filter(|b| on_frame(b)))
-                    .map(|b| b.energy_share),
+                    .map(visible),
                 opts.dim_budget,
             )
         } else {
             0.0
         };
+        let (mut kept_visible, mut culled_visible) = (0.0, 0.0);
         let mut bins = Bins::default();
         let mut ghosts = Vec::new();
         let mut dropped = Vec::new();
@@ -423,12 +412,17 @@ impl<'p, 'o> Planner<'p, 'o> {
                 dropped.push(drop(DropReason::OffFrame));
                 continue;
             }
-            if opts.cull && b.energy_share < dim_below {
+            if opts.cull && visible(&b) < dim_below {
+                culled_visible += visible(&b);
                 dropped.push(drop(DropReason::Dim));
                 continue;
             }
+            kept_visible += visible(&b);
             ghosts.push(self.ghost_job(path, b, &job, &mut bins));
         }
+        // A four-reflection ghost's bound is all its energy might be, on the frame or not.
+        culled_visible += bounded_out.iter().map(|d| d.energy_share).sum::<f64>();
+        let seen = kept_visible + culled_visible;
         dropped.extend(bounded_out);
         Ok(LightPlan {
             light: light.clone(),
@@ -438,6 +432,11 @@ impl<'p, 'o> Planner<'p, 'o> {
             dropped,
             reflections: opts.reflections,
             not_in_table,
+            culled_share: if seen > 0.0 {
+                culled_visible / seen
+            } else {
+                0.0
+            },
         })
     }
 
@@ -811,6 +810,28 @@ pub fn coarse_factor(sensor: &Rect, n: usize, frame: &Frame, max: usize, per_rad
 }
 
 /// True when a sensor rectangle (mm) overlaps the frame.
+/// A ghost's energy share ([`GhostBounds::energy_share`]) times the part of its sensor
+/// rectangle (rotated by the light's azimuth `phi`) inside the frame: the energy it brings to
+/// the image, if it were spread evenly over its rectangle. Culling weighs ghosts by it, so a
+/// large ghost mostly off the frame does not make the frame's dim ghosts look dimmer than they
+/// are.
+pub fn on_frame_share(b: &GhostBounds, phi: f64, frame: &Frame) -> f64 {
+    let r = b.sensor.rotated(phi);
+    let (hw, hh) = (0.5 * frame.film_width_mm, 0.5 * frame.film_height_mm);
+    // Along each axis, the part of the extent inside the frame (a point inside counts whole).
+    let part = |lo: f64, hi: f64, half: f64| {
+        let inside = hi.min(half) - lo.max(-half);
+        if hi > lo {
+            (inside / (hi - lo)).clamp(0.0, 1.0)
+        } else if inside >= 0.0 {
+            1.0
+        } else {
+            0.0
+        }
+    };
+    b.energy_share * part(r.x0, r.x1, hw) * part(r.y0, r.y1, hh)
+}
+
 fn overlaps_frame(sensor: &Rect, frame: &Frame) -> bool {
     let (hw, hh) = (0.5 * frame.film_width_mm, 0.5 * frame.film_height_mm);
     sensor.x1 >= -hw && sensor.x0 <= hw && sensor.y1 >= -hh && sensor.y0 <= hh

@@ -126,35 +126,26 @@ pub fn reference_image_of_order(
 }
 
 /// The reference ghost by ghost: each of its ghosts rendered alone
-/// ([`ghosts::render_each_ghost`]) and handed to `each` with its light's index and path; returns
-/// their sum, the reference image (equal to [`reference_image_of_order`]'s but for the order
-/// of the f32 additions).
-pub fn reference_by_ghost(
+/// ([`ghosts::render_each_ghost`]) and handed to `each` with its light's index and path;
+/// returns what `each` returned, in plan order, and their sum, the reference image (equal to
+/// [`reference_image_of_order`]'s but for the order of the f32 additions).
+pub fn reference_by_ghost<R: Send>(
     system: &LensSystem,
     aperture: &Aperture,
     frame: Frame,
     lights: &[LightSpec],
     reflections: ReflectionOrder,
-    mut each: impl FnMut(usize, &flarebench_sdk::ghost::GhostPath, &HdrImage),
-) -> Result<HdrImage, GhostRenderError> {
-    let mut plans = reference_plans_of_order(system, lights, &frame, 1.0, reflections)?;
-    let mut sum = HdrImage::new(frame.width, frame.height);
+    each: impl Fn(usize, &flarebench_sdk::ghost::GhostPath, &HdrImage) -> R + Sync,
+) -> Result<(Vec<R>, HdrImage), GhostRenderError> {
+    let plans = reference_plans_of_order(system, lights, &frame, 1.0, reflections)?;
     ghosts::render_each_ghost(
         system,
         aperture,
         frame,
-        &mut plans,
+        &plans,
         BAND_BY_BAND,
-        |li, job, img| {
-            for (o, p) in sum.pixels.iter_mut().zip(&img.pixels) {
-                for c in 0..3 {
-                    o[c] += p[c];
-                }
-            }
-            each(li, &job.path, img);
-        },
-    )?;
-    Ok(sum)
+        |li, job, img| each(li, &job.path, img),
+    )
 }
 
 /// The reference with `density` times as many grid vertices a side (the convergence check).

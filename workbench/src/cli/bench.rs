@@ -161,6 +161,8 @@ pub struct BenchRow {
     pub ghosts_total: usize,
     /// Share of the ghosts' energy left out by the plan.
     pub dropped_energy_fraction: f64,
+    /// Share of the frame's ghost energy culled as dim (`LightPlan::culled_share`).
+    pub culled_energy_fraction: f64,
     /// Building the lens's interface tables once, before the runs (milliseconds): what a
     /// plugin does when the lens is prepared (`ghost_raytrace::plan::LensTables`).
     pub prepare_ms: f64,
@@ -268,6 +270,7 @@ pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
                         ghosts_drawn: lp.ghosts.len(),
                         ghosts_total: lp.ghosts.len() + lp.dropped.len(),
                         dropped_energy_fraction: if total > 0.0 { dropped / total } else { 0.0 },
+                        culled_energy_fraction: lp.culled_share,
                         prepare_ms,
                         plan_ms: timed.plan_ms,
                         render_ms: timed.render_ms,
@@ -293,6 +296,7 @@ pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
         "size",
         "ghosts",
         "dropped",
+        "culled",
         "lens ms",
         "plan ms",
         "render ms",
@@ -313,6 +317,7 @@ pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
             format!("{}×{}", r.width, r.height),
             format!("{}/{}", r.ghosts_drawn, r.ghosts_total),
             format!("{:.2}%", 100.0 * r.dropped_energy_fraction),
+            format!("{:.2}%", 100.0 * r.culled_energy_fraction),
             format!("{:.1}", r.prepare_ms),
             format!("{:.1}", r.plan_ms),
             format!("{:.1}", r.render_ms),

@@ -144,7 +144,13 @@ fn list(args: &ListArgs) -> anyhow::Result<()> {
                     println!("  ({r})");
                 }
                 // Names in a column as wide as the longest (at least 12).
-                let w = e.params.iter().map(|p| p.name.len()).max().unwrap_or(0).max(12);
+                let w = e
+                    .params
+                    .iter()
+                    .map(|p| p.name.len())
+                    .max()
+                    .unwrap_or(0)
+                    .max(12);
                 for p in &e.params {
                     println!(
                         "  {:<w$} {:<28} default {:<8} {}",

@@ -362,8 +362,24 @@ pub fn run(args: &SweepArgs, quiet: bool) -> anyhow::Result<()> {
     outcome
 }
 
+/// The running executable as a build: its size and modification time. A rebuilt workbench
+/// (a changed renderer) redoes the cells of an earlier build.
+fn build_identity() -> String {
+    std::env::current_exe()
+        .and_then(std::fs::metadata)
+        .map(|m| {
+            let t = m
+                .modified()
+                .ok()
+                .and_then(|t| t.duration_since(UNIX_EPOCH).ok())
+                .map_or(0, |d| d.as_nanos());
+            format!("{} bytes, modified {t}", m.len())
+        })
+        .unwrap_or_else(|_| "unknown build".to_string())
+}
+
 /// Everything a cell depends on: its scene (the reference's key), the algorithm with every
-/// parameter's value, the backend, the runs and the workbench's version.
+/// parameter's value, the backend, the runs and the workbench's version and build.
 fn cell_key(
     reference_key: &str,
     p: &Point,
@@ -380,8 +396,9 @@ fn cell_key(
         .map(|(i, &v)| format!("{}={}", i.name, i.format_value(v)))
         .collect();
     Ok(format!(
-        "flarebench-sweep {}; {reference_key}; algo {name} {}; backend {backend}; runs {runs}",
+        "flarebench-sweep {} ({}); {reference_key}; algo {name} {}; backend {backend}; runs {runs}",
         env!("CARGO_PKG_VERSION"),
+        build_identity(),
         canonical.join(",")
     ))
 }

@@ -59,14 +59,13 @@ pub struct Scene1<'a> {
 /// The reference of a scene, ghost by ghost (its `key` left for the caller to fill).
 pub fn reference(scene: &Scene1<'_>) -> Result<(ReferenceRecord, HdrImage)> {
     let t = Instant::now();
-    let mut ghosts = Vec::new();
-    let img = reference_by_ghost(
+    let (ghosts, img) = reference_by_ghost(
         scene.system,
         scene.aperture,
         scene.frame,
         std::slice::from_ref(scene.light),
         ReflectionOrder::Two,
-        |_, path, img| ghosts.push((path.to_string(), Moments::of(img))),
+        |_, path, img| (path.to_string(), Moments::of(img)),
     )?;
     let rec = ReferenceRecord {
         key: String::new(),
@@ -158,18 +157,17 @@ fn measure_builtin(
         }
         last = Some((plans, img));
     }
-    let (mut plans, image) = last.expect("at least the warm-up run");
-    let culled = plans[0].culled_share();
+    let (plans, image) = last.expect("at least the warm-up run");
+    let culled = plans[0].culled_share;
     let ghosts_drawn = plans[0].ghosts.len();
     let ghosts_total = ghosts_drawn + plans[0].dropped.len();
-    let mut per = Vec::new();
-    ghosts::render_each_ghost(
+    let (per, _) = ghosts::render_each_ghost(
         scene.system,
         scene.aperture,
         scene.frame,
-        &mut plans,
+        &plans,
         RenderOptions::default(),
-        |_, job, img| per.push((job.path.to_string(), Moments::of(img))),
+        |_, job, img| (job.path.to_string(), Moments::of(img)),
     )?;
     Ok(Measurement {
         params: param_text(&info, &values),

@@ -91,6 +91,9 @@ pub struct FrameStats {
     pub ghosts_dropped: usize,
     /// The share of the ghost energy left out by planning, over all lights.
     pub dropped_energy_fraction: f64,
+    /// The largest share of a light's on-frame ghost energy that culling left out
+    /// (`LightPlan::culled_share`).
+    pub culled_energy_fraction: f64,
     pub triangles: usize,
     pub plan_ms: f64,
     /// The plan looked its bounds up in the lens's table (`bounds_table`) instead of tracing
@@ -541,6 +544,7 @@ impl Renderer {
             }));
         }
         stats.dropped_energy_fraction = if total > 0.0 { dropped / total } else { 0.0 };
+        stats.culled_energy_fraction = plans.iter().map(|p| p.culled_share).fold(0.0, f64::max);
         stats.auto_exposure_ev = lit_exposure(&img).map_or(0.0, |ev| ev + GHOST_HEADROOM_EV);
 
         let t = Instant::now();

@@ -25,7 +25,7 @@ pub fn frame_line(f: &FlareFrame) -> String {
     };
     let mut line = format!(
         "{stage} frame ({}) {:.0} ms: plan {:.1}{}, ghosts {:.1}, starburst {:.1}, tone {:.1} ms · \
-         {} ghosts drawn, {} left out ({:.2}% of the ghost energy) · {} triangles",
+         {} ghosts drawn, {} left out ({:.2}% of the ghost energy, {:.2}% of the frame's culled) · {} triangles",
         f.quality.name(),
         s.total_ms,
         s.plan_ms,
@@ -42,6 +42,7 @@ pub fn frame_line(f: &FlareFrame) -> String {
         s.ghosts_drawn,
         s.ghosts_dropped,
         100.0 * s.dropped_energy_fraction,
+        100.0 * s.culled_energy_fraction,
         s.triangles
     );
     if let Some(t) = s.debug_ms {
