@@ -50,6 +50,15 @@ impl BoundsTabulation {
         Arc::ptr_eq(&self.system, system) || *self.system == **system
     }
 
+    /// True when `system` has the same ghosts as this tabulation's lens (the same paths
+    /// through the same surface count and stop): its rectangles are then where the edited
+    /// lens's ghosts start, for a fast frame drawn before the edited lens is tabulated.
+    pub fn same_ghosts(&self, system: &LensSystem) -> bool {
+        self.system.surfaces.len() == system.surfaces.len()
+            && flarebench_sdk::ghost::enumerate_ghosts(&self.system)
+                == flarebench_sdk::ghost::enumerate_ghosts(system)
+    }
+
     /// Angles computed so far.
     pub fn angles_done(&self) -> usize {
         self.done.as_ref().map_or(0, |t| t.angles_deg.len())
@@ -109,6 +118,17 @@ mod tests {
         let path =
             std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../lenses/heliar-tronnier.xml");
         Arc::new(read_lens(&path).unwrap().system)
+    }
+
+    #[test]
+    fn a_changed_radius_keeps_the_ghosts_and_a_removed_surface_does_not() {
+        let sys = heliar();
+        let t = BoundsTabulation::new(Arc::clone(&sys)).unwrap();
+        let mut edited = (*sys).clone();
+        edited.surfaces[0].curvature *= 1.02;
+        assert!(t.same_ghosts(&edited));
+        edited.surfaces.remove(1);
+        assert!(!t.same_ghosts(&edited));
     }
 
     /// Built an angle at a time, each ghost's search continuing from its last rectangle, the

@@ -101,6 +101,9 @@ pub struct FrameStats {
     pub bounds_from_table: bool,
     /// The plan traced its bounds starting from the last frame's rectangles.
     pub warm_started: bool,
+    /// The table the plan looked its bounds up in was the lens's before the last edit (a
+    /// fast frame before the edited lens is tabulated).
+    pub bounds_from_previous_lens: bool,
     pub ghosts_ms: f64,
     pub starburst_ms: f64,
     pub tone_ms: f64,
@@ -377,6 +380,10 @@ struct Renderer {
     lens_tables: Option<LensTables>,
     /// The lens's ghost bounds over the light's angles, built while idle.
     tabulation: Option<BoundsTabulation>,
+    /// The tabulation of the lens before the last edit: the fast frames of the edited lens
+    /// look its bounds up there (when its ghosts are the same) until the edited lens's own
+    /// table covers the lights.
+    previous_tabulation: Option<BoundsTabulation>,
     /// The last frame's ghost rectangles, light by light (before `solo`): a fast frame that
     /// traces its bounds starts each ghost's search there (`PlanOptions::warm_start`).
     last_plans: Vec<WarmStart>,
@@ -392,6 +399,7 @@ impl Renderer {
                 starbursts: StarburstCache::new(),
                 lens_tables: None,
                 tabulation: None,
+                previous_tabulation: None,
                 last_plans: Vec::new(),
                 fallback: None,
             },
@@ -400,6 +408,7 @@ impl Renderer {
                 starbursts: StarburstCache::new(),
                 lens_tables: None,
                 tabulation: None,
+                previous_tabulation: None,
                 last_plans: Vec::new(),
                 fallback: Some(format!("{e:#}; drawing on the CPU")),
             },
@@ -470,18 +479,42 @@ impl Renderer {
             .as_ref()
             .is_none_or(|b| !b.is_for(&job.system))
         {
-            self.tabulation = BoundsTabulation::new(Arc::clone(&job.system));
+            let old = std::mem::replace(
+                &mut self.tabulation,
+                BoundsTabulation::new(Arc::clone(&job.system)),
+            );
+            // Keep the last table that holds anything (edits faster than tabulation keep
+            // the one before them).
+            if old.as_ref().is_some_and(|t| t.angles_done() > 0) {
+                self.previous_tabulation = old;
+            }
         }
-        // Fast frames look bounds up once the table covers the lights; the settled frame
+        // Fast frames look bounds up once the table covers the lights; until the edited
+        // lens's does, in the table of the lens before the edit (same ghosts: its rectangles
+        // are where the edited lens's ghosts are searched for anyway). The settled frame
         // traces them.
-        let table = match stage {
-            Stage::Fast => self
-                .tabulation
-                .as_ref()
-                .and_then(|b| b.table_for(&scene.lights)),
-            Stage::Settled | Stage::Reference => None,
+        let (table, previous) = match stage {
+            Stage::Fast => {
+                let own = self
+                    .tabulation
+                    .as_ref()
+                    .and_then(|b| b.table_for(&scene.lights));
+                match own {
+                    Some(t) => (Some(t), false),
+                    None => {
+                        let prev = self
+                            .previous_tabulation
+                            .as_ref()
+                            .filter(|b| b.same_ghosts(sys))
+                            .and_then(|b| b.table_for(&scene.lights));
+                        (prev, prev.is_some())
+                    }
+                }
+            }
+            Stage::Settled | Stage::Reference => (None, false),
         };
         stats.bounds_from_table = table.is_some();
+        stats.bounds_from_previous_lens = previous;
         let mut preset = PlanOptions::for_quality(quality, table);
         preset.lens_tables = self.lens_tables.as_ref();
         // Without a table, a fast frame's search starts from the last frame's rectangles (the

@@ -29,7 +29,9 @@ pub fn frame_line(f: &FlareFrame) -> String {
         f.quality.name(),
         s.total_ms,
         s.plan_ms,
-        if s.bounds_from_table {
+        if s.bounds_from_previous_lens {
+            " (table of the lens before the edit)"
+        } else if s.bounds_from_table {
             " (table)"
         } else if s.warm_started {
             " (warm)"
