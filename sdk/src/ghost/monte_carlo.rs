@@ -80,7 +80,7 @@ pub struct McBand {
 }
 
 /// A mean and its standard error.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct McEstimate {
     pub mean: f64,
     pub std_error: f64,
