@@ -553,62 +553,96 @@ fn edge_dips(n: usize, excess: &[f32]) -> Vec<(usize, usize)> {
     out
 }
 
-/// Zoom levels [`zoom`] may descend, and the vertices a side of each level's grid.
-const ZOOM_LEVELS: usize = 3;
-const ZOOM_GRID: usize = 17;
+/// Zoom levels [`zoom`] may descend, the vertices a side of each level's grid, and how many
+/// starting vertices it tries.
+const ZOOM_LEVELS: usize = 4;
+const ZOOM_GRID: usize = 9;
+const ZOOM_STARTS: usize = 3;
 
-/// For a search grid (in `scratch`) where no ray passes: the grid, down to [`ZOOM_LEVELS`]
-/// levels, over ±1.5 cells about the vertex whose ray came nearest to passing (the smallest
-/// excess `r/semi − 1`), while that excess is within twice the largest change of the excess
-/// to its neighbours (so the region may lie between them), or every neighbour's ray stopped
-/// (the path open only in a narrow channel there); the passing vertices' box, a cell
-/// wider all round, when a level finds some. The Nikon zoom's short ghosts 10-3, 10-6, 13-3,
-/// 13-6 and 13-8 at 5°, under 1 mm across, fell between the 2.07 mm spacing of the search
-/// grid and were reported as having no light.
+/// For a search grid (in `scratch`) where no ray passes: about each of the [`ZOOM_STARTS`]
+/// vertices (at least two cells apart) whose rays came nearest to passing (the smallest excess `r/semi − 1`) that may
+/// have the region beside them — the excess within twice its largest change to a neighbour,
+/// or a neighbour's ray stopped (the path open only in a narrow channel there) — grids of
+/// ±1.5 cells, down to [`ZOOM_LEVELS`] levels each about the nearest vertex of the last;
+/// the passing vertices' box, a cell wider all round, when a level finds some. The Nikon
+/// zoom's short ghosts 10-3, 10-6, 13-3, 13-6 and 13-8 at 5°, under 1 mm across, fell between
+/// the 2.07 mm spacing of the search grid and were reported as having no light.
 fn zoom(seq: &Sequence<f32>, theta: f64, stop: f64, scratch: &mut GridTrace) -> Option<Rect> {
-    for _ in 0..ZOOM_LEVELS {
-        let g = &*scratch;
-        let n = g.n;
-        let excess = |k: usize| g.completed[k].then(|| g.max_rel[k] as f64 - 1.0);
-        let (best, e) = (0..n * n)
-            .filter_map(|k| excess(k).map(|e| (k, e)))
-            .min_by(|a, b| a.1.total_cmp(&b.1))?;
-        let (i, j) = (best % n, best / n);
-        // The largest change to a neighbour whose ray completed; none (every neighbour's ray
-        // stopped: the path is open only in a narrow channel about this vertex) counts as
-        // steep.
-        let mut slope: Option<f64> = None;
-        for (di, dj) in [(-1i64, 0i64), (1, 0), (0, -1), (0, 1)] {
-            let (ii, jj) = (i as i64 + di, j as i64 + dj);
-            if ii < 0 || jj < 0 || ii >= n as i64 || jj >= n as i64 {
-                continue;
+    let starts = candidates(scratch);
+    let search_cell = cell_size(scratch);
+    for start in starts {
+        let mut centre = start;
+        let mut cell = search_cell;
+        for level in 0..ZOOM_LEVELS {
+            let r = Rect {
+                x0: centre[0] - 1.5 * cell.0,
+                y0: centre[1] - 1.5 * cell.1,
+                x1: centre[0] + 1.5 * cell.0,
+                y1: centre[1] + 1.5 * cell.1,
+            };
+            trace_grid(seq, theta, r, ZOOM_GRID, stop, scratch);
+            if let Some(found) = region_box(scratch) {
+                let (cx, cy) = cell_size(scratch);
+                return Some(found.expand(cx, cy));
             }
-            if let Some(en) = excess(jj as usize * n + ii as usize) {
-                slope = Some(slope.unwrap_or(0.0).max((en - e).abs()));
+            if level + 1 == ZOOM_LEVELS {
+                break;
             }
-        }
-        if slope.is_some_and(|s| !(e <= 2.0 * s)) {
-            return None;
-        }
-        let (cx, cy) = cell_size(g);
-        let d = (n - 1) as f64;
-        let centre = [
-            g.rect.x0 + g.rect.width() * i as f64 / d,
-            g.rect.y0 + g.rect.height() * j as f64 / d,
-        ];
-        let r = Rect {
-            x0: centre[0] - 1.5 * cx,
-            y0: centre[1] - 1.5 * cy,
-            x1: centre[0] + 1.5 * cx,
-            y1: centre[1] + 1.5 * cy,
-        };
-        trace_grid(seq, theta, r, ZOOM_GRID, stop, scratch);
-        if let Some(found) = region_box(scratch) {
-            let (cx, cy) = cell_size(scratch);
-            return Some(found.expand(cx, cy));
+            match candidates(scratch).first() {
+                Some(&c) => centre = c,
+                None => break,
+            }
+            cell = cell_size(scratch);
         }
     }
     None
+}
+
+/// The vertices of `g` (entrance positions, nearest to passing first) beside which a region
+/// too small for the grid may pass: see [`zoom`].
+fn candidates(g: &GridTrace) -> Vec<[f64; 2]> {
+    let n = g.n;
+    let excess = |k: usize| g.completed[k].then(|| g.max_rel[k] as f64 - 1.0);
+    let mut order: Vec<(usize, f64)> = (0..n * n)
+        .filter_map(|k| excess(k).map(|e| (k, e)))
+        .collect();
+    order.sort_by(|a, b| a.1.total_cmp(&b.1));
+    let d = (n - 1) as f64;
+    order
+        .into_iter()
+        .filter(|&(k, e)| {
+            let (i, j) = ((k % n) as i64, (k / n) as i64);
+            let mut slope = 0.0_f64;
+            let mut stopped = false;
+            for (di, dj) in [(-1i64, 0i64), (1, 0), (0, -1), (0, 1)] {
+                let (ii, jj) = (i + di, j + dj);
+                if ii < 0 || jj < 0 || ii >= n as i64 || jj >= n as i64 {
+                    continue;
+                }
+                match excess(jj as usize * n + ii as usize) {
+                    Some(en) => slope = slope.max((en - e).abs()),
+                    None => stopped = true,
+                }
+            }
+            stopped || e <= 2.0 * slope
+        })
+        .map(|(k, _)| k)
+        .fold(Vec::<usize>::new(), |mut kept, k| {
+            // One start per cluster: none within two cells of a nearer one.
+            let near = |a: usize| (a % n).abs_diff(k % n) <= 2 && (a / n).abs_diff(k / n) <= 2;
+            if kept.len() < ZOOM_STARTS && !kept.iter().any(|&a| near(a)) {
+                kept.push(k);
+            }
+            kept
+        })
+        .into_iter()
+        .map(|k| {
+            [
+                g.rect.x0 + g.rect.width() * (k % n) as f64 / d,
+                g.rect.y0 + g.rect.height() * (k / n) as f64 / d,
+            ]
+        })
+        .collect()
 }
 
 /// The entrance-plane positions of the passing vertices' bounding box.
