@@ -8,10 +8,13 @@
 //! - [`colour`]: each ghost's colour per traced band, integrated in 5 nm steps.
 //! - [`ghosts`]: carrying out a plan into a linear HDR image.
 //! - [`reference`]: the dense reference renderer behind every error figure.
+//! - [`crosscheck`]: every ghost by the independent Monte-Carlo reference, the mesh reference
+//!   and the renderer, side by side.
 //! - [`error`]: what can go wrong.
 //! - [`plugin`]: the same renderer as a plugin (ABI v1), for `flarebench compare`.
 
 pub mod colour;
+pub mod crosscheck;
 pub mod error;
 pub mod ghosts;
 pub mod plan;

@@ -52,8 +52,10 @@ pub const REFERENCE_GRID_SCALE: f64 = 10.0;
 /// rectangle the ghost reaches the side of (`ghost::bounds::precise_from`), which had cut
 /// some ghosts — the Heliar's 6-4 lost a third of its width. 3: each ghost at as many bands
 /// as its dispersion needs (an eighth of a pixel apart, 31 to 160), each band's colour its exact
-/// share of the 5 nm cells it spans.
-pub const REFERENCE_VERSION: u32 = 3;
+/// share of the 5 nm cells it spans. 4: bounds that follow a ghost's thin parts and find its
+/// small entry regions (`ghost::bounds`: `edge_dips`, `zoom`), energies measured over the
+/// pupil — ghosts the reference had cut or missed.
+pub const REFERENCE_VERSION: u32 = 4;
 
 /// A text naming everything the reference image depends on: the renderer's version and
 /// settings, the reflection order, the lens (fingerprint of its canonical XML), the aperture, the frame and every

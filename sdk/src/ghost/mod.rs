@@ -21,6 +21,9 @@
 //! - [`sink`]: the seam between making a frame's triangles and drawing them — the levels,
 //!   the [`sink::GhostSink`] the CPU rasterizer and the GPU backend both implement, and a
 //!   recording ([`sink::FrameMeshes`]).
+//! - [`monte_carlo`]: the independent reference — stratified random rays traced in f64 along a
+//!   ghost path and splatted where they land (energy, centroid, second moments, image, and
+//!   their error bars), sharing neither the grids, the meshing nor the rasterizer.
 //! - [`table`]: bounds precomputed over a range of angles, stored and interpolated.
 //! - [`olf_table`]: OpenLensFlare's precomputed bounds (`<ghostList>` XML) as such a table,
 //!   checked against the lens, energies traced.
@@ -33,6 +36,7 @@ pub mod fringe;
 pub mod fringe_table;
 pub mod grid;
 pub mod mesh;
+pub mod monte_carlo;
 pub mod olf_table;
 pub mod render;
 mod row_split;

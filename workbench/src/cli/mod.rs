@@ -4,6 +4,7 @@ mod apply;
 mod bench;
 mod compare;
 mod convert;
+mod crosscheck;
 #[cfg(feature = "tui")]
 mod edit;
 mod info;
@@ -56,6 +57,9 @@ pub enum Command {
     /// Render one scene with several algorithm plugins: side-by-side and difference images,
     /// median time, error against the reference, items drawn, peak memory.
     Compare(compare::CompareArgs),
+    /// Every ghost of one light by the independent Monte-Carlo reference, the mesh reference
+    /// and the renderer: energies, centroids, second moments, images.
+    Crosscheck(crosscheck::CrosscheckArgs),
     /// Flare algorithm plugins: `plugins list`.
     Plugins(plugins::PluginsArgs),
     /// Error against run time over algorithms, presets and the planner's thresholds: CSV,
@@ -77,6 +81,7 @@ pub fn main() -> ExitCode {
         Command::Compare(a) => compare::run(a, cli.quiet),
         Command::Bench(a) => bench::run(a, cli.quiet),
         Command::Sweep(a) => sweep::run(a, cli.quiet),
+        Command::Crosscheck(a) => crosscheck::run(a, cli.quiet),
         #[cfg(feature = "tui")]
         Command::Edit(a) => edit::run(a, cli.quiet),
         #[cfg(feature = "window")]

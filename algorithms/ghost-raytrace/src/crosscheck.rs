@@ -1,0 +1,342 @@
+//! Three estimates of every ghost side by side: the independent Monte-Carlo reference
+//! (`flarebench_sdk::ghost::monte_carlo`: random rays, no grids, meshes or rasterizer), the
+//! dense mesh reference ([`crate::reference`]) and the renderer ([`crate::ghosts`] at a
+//! quality preset).
+//!
+//! Per ghost: its energy share at [`BOUNDS_LAMBDA_NM`] (the flux over the on-axis direct
+//! image's, the figure the plan reports and culls by) from the Monte-Carlo tracer and from the
+//! bounds search; and its image — each ghost drawn alone — as each of the three draws it: the
+//! luminance summed over the frame, the flux-weighted centroid and the central second moments.
+//! The Monte-Carlo reference traces each ghost at the mesh reference's bands, in the same
+//! colours; its centroid and moments are those of the rays' landing points in the frame
+//! (exact positions), the images' those of pixel centres (which adds 1/12 px² to each
+//! variance).
+
+use flarebench_sdk::LensSystem;
+use flarebench_sdk::aperture::Aperture;
+use flarebench_sdk::frame::Frame;
+use flarebench_sdk::ghost::bounds::reference_flux;
+use flarebench_sdk::ghost::monte_carlo::{
+    McBand, McEstimate, McGhost, McImages, McSettings, ghost_monte_carlo, path_flux,
+};
+use flarebench_sdk::ghost::{GhostPath, GridTrace};
+use flarebench_sdk::image::HdrImage;
+use flarebench_sdk::trace::{InterfaceTableSet, Sequence};
+use serde::Serialize;
+
+use crate::GhostRenderError;
+use crate::colour::{Bin, GhostColours};
+use crate::ghosts::{self, RenderOptions};
+use crate::plan::{self, BOUNDS_LAMBDA_NM, DropReason, GhostJob, LightPlan, PlanOptions};
+use crate::reference;
+use crate::scene::{LightSpec, Quality};
+
+/// What to compare.
+#[derive(Clone, Debug)]
+pub struct CrosscheckOptions {
+    pub mc: McSettings,
+    /// The renderer's preset.
+    pub quality: Quality,
+    /// Render the mesh reference too (slow on lenses of many ghosts).
+    pub reference: bool,
+    /// Only these ghosts (all when empty).
+    pub ghosts: Vec<GhostPath>,
+}
+
+/// A ghost's image as one renderer drew it (alone in the frame).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct ImageMoments {
+    /// Luminance summed over the frame (image units).
+    pub energy: f64,
+    /// Flux-weighted centroid of the luminance (pixels; pixel centres at half-integers).
+    pub centroid_px: [f64; 2],
+    /// Central second moments (px²): xx, xy, yy.
+    pub moments_px2: [f64; 3],
+}
+
+impl ImageMoments {
+    /// The luminance moments of `img`.
+    pub fn of(img: &HdrImage) -> ImageMoments {
+        let mut s = [0.0_f64; 6];
+        for (k, p) in img.pixels.iter().enumerate() {
+            let l = 0.2126 * f64::from(p[0]) + 0.7152 * f64::from(p[1]) + 0.0722 * f64::from(p[2]);
+            let x = (k % img.width) as f64 + 0.5;
+            let y = (k / img.width) as f64 + 0.5;
+            s[0] += l;
+            s[1] += l * x;
+            s[2] += l * y;
+            s[3] += l * x * x;
+            s[4] += l * x * y;
+            s[5] += l * y * y;
+        }
+        if s[0] <= 0.0 {
+            return ImageMoments::default();
+        }
+        let c = [s[1] / s[0], s[2] / s[0]];
+        ImageMoments {
+            energy: s[0],
+            centroid_px: c,
+            moments_px2: [
+                s[3] / s[0] - c[0] * c[0],
+                s[4] / s[0] - c[0] * c[1],
+                s[5] / s[0] - c[1] * c[1],
+            ],
+        }
+    }
+}
+
+/// One ghost's row.
+#[derive(Clone, Debug, Serialize)]
+pub struct GhostRow {
+    pub path: String,
+    /// Energy share at 550 nm: Monte-Carlo (its error bar propagated from the ghost's and the
+    /// direct flux's) and the bounds search's (`None`: reported as having no light).
+    pub mc_share: McEstimate,
+    pub bounds_share: Option<f64>,
+    /// The Monte-Carlo image estimate (`None` for a ghost without a sequence).
+    #[serde(skip)]
+    pub mc: Option<McGhost>,
+    pub mc_energy: McEstimate,
+    pub mc_centroid_px: [f64; 2],
+    pub mc_centroid_err_px: [f64; 2],
+    pub mc_moments_px2: [f64; 3],
+    /// Rays the Monte-Carlo image estimate traced.
+    pub mc_rays: usize,
+    /// The mesh reference's image of the ghost (`None` when not rendered, or it has no job).
+    pub reference: Option<ImageMoments>,
+    /// The renderer's (`None` when the plan left it out: `dropped` says why).
+    pub renderer: Option<ImageMoments>,
+    pub dropped: Option<DropReason>,
+}
+
+/// The whole comparison for one light.
+#[derive(Debug, Serialize)]
+pub struct Crosscheck {
+    pub ghosts: Vec<GhostRow>,
+    /// The on-axis direct flux at 550 nm (mm², unit irradiance): Monte-Carlo and the bounds'
+    /// `reference_flux`.
+    pub direct_mc: McEstimate,
+    pub direct_bounds: f64,
+    /// All compared ghosts together: relative RMSE of the mesh reference's and the renderer's
+    /// images against the Monte-Carlo image, and that image's own noise (relative RMSE).
+    pub reference_rmse: Option<f64>,
+    pub renderer_rmse: f64,
+    pub mc_noise: f64,
+    #[serde(skip)]
+    pub images: CrosscheckImages,
+}
+
+/// The three images of the compared ghosts.
+#[derive(Debug)]
+pub struct CrosscheckImages {
+    pub mc: McImages,
+    pub reference: Option<HdrImage>,
+    pub renderer: HdrImage,
+}
+
+impl Default for CrosscheckImages {
+    fn default() -> Self {
+        CrosscheckImages {
+            mc: McImages::new(&Frame::across_film(1, 1, 1.0)),
+            reference: None,
+            renderer: HdrImage::new(1, 1),
+        }
+    }
+}
+
+/// A plan of one ghost of `lp`.
+fn alone(lp: &LightPlan, job: &GhostJob) -> LightPlan {
+    LightPlan {
+        light: lp.light.clone(),
+        bands: lp.bands.clone(),
+        sampled: lp.sampled,
+        ghosts: vec![job.clone()],
+        dropped: Vec::new(),
+        reflections: lp.reflections,
+        not_in_table: Vec::new(),
+        culled_share: 0.0,
+    }
+}
+
+/// `job` drawn alone with `options`.
+fn draw_alone(
+    system: &LensSystem,
+    aperture: &Aperture,
+    frame: Frame,
+    lp: &LightPlan,
+    job: &GhostJob,
+    options: RenderOptions,
+) -> Result<HdrImage, GhostRenderError> {
+    Ok(ghosts::render_with(system, aperture, frame, &[alone(lp, job)], options)?.0)
+}
+
+/// Compares the three estimates of every ghost of `light`.
+pub fn crosscheck(
+    system: &LensSystem,
+    aperture: &Aperture,
+    frame: Frame,
+    light: &LightSpec,
+    opts: &CrosscheckOptions,
+) -> Result<Crosscheck, GhostRenderError> {
+    let lights = std::slice::from_ref(light);
+    let theta = light.theta_deg.to_radians();
+    let phi = light.phi_deg.to_radians();
+    let chosen = |p: GhostPath| opts.ghosts.is_empty() || opts.ghosts.contains(&p);
+    // The mesh reference's plan: every ghost with light, at its bands and colours, which the
+    // Monte-Carlo reference traces too.
+    let ref_plan = reference::reference_plans(system, lights, &frame, 1.0)?
+        .pop()
+        .expect("one plan per light");
+    let preset = plan::plan(
+        system,
+        lights,
+        &frame,
+        &PlanOptions::for_quality(opts.quality, None),
+    )?
+    .pop()
+    .expect("one plan per light");
+    let tables = InterfaceTableSet::for_system(system, BOUNDS_LAMBDA_NM);
+    let direct_bounds = reference_flux(system, &tables, &mut GridTrace::default());
+    let direct_mc = path_flux(
+        system,
+        &Sequence::forward(system, BOUNDS_LAMBDA_NM),
+        0.0,
+        &opts.mc,
+    );
+    // Ghosts the plans found no light in are traced in the colours of 31 equal bins.
+    let colours = GhostColours::new(system, light.spectrum, light.intensity as f32)?;
+    let fallback_bins: Vec<Bin> = (0..31).map(|i| Bin::new(system, 31, i)).collect();
+    let mut images = CrosscheckImages {
+        mc: McImages::new(&frame),
+        reference: opts
+            .reference
+            .then(|| HdrImage::new(frame.width, frame.height)),
+        renderer: HdrImage::new(frame.width, frame.height),
+    };
+    let band_by_band = RenderOptions {
+        band_by_band: true,
+        ..RenderOptions::default()
+    };
+    let mut rows = Vec::new();
+    let paths: Vec<GhostPath> = ref_plan
+        .ghosts
+        .iter()
+        .map(|g| g.path)
+        .chain(ref_plan.dropped.iter().map(|d| d.path))
+        .filter(|&p| chosen(p))
+        .collect();
+    for path in paths {
+        let ref_job = ref_plan.ghosts.iter().find(|g| g.path == path);
+        let bands: Vec<McBand> = match ref_job {
+            Some(job) => job
+                .bands
+                .iter()
+                .map(|b| McBand {
+                    lambda_nm: ref_plan.bands[b.band].lambda_nm,
+                    rgb: b.rgb,
+                })
+                .collect(),
+            None => fallback_bins
+                .iter()
+                .map(|bin| McBand {
+                    lambda_nm: bin.centre_nm,
+                    rgb: colours.bin_colour(path, bin),
+                })
+                .collect(),
+        };
+        let mc = ghost_monte_carlo(
+            system,
+            aperture,
+            &frame,
+            path,
+            (theta, phi, 1.0),
+            &bands,
+            &opts.mc,
+            Some(&mut images.mc),
+        );
+        let mc_share = match Sequence::ghost_path(system, BOUNDS_LAMBDA_NM, &path) {
+            Ok(seq) => {
+                let g = path_flux(system, &seq, theta, &opts.mc);
+                let mean = g.mean / direct_mc.mean;
+                let rel = (g.relative_error().powi(2) + direct_mc.relative_error().powi(2)).sqrt();
+                McEstimate {
+                    mean,
+                    std_error: if g.mean > 0.0 {
+                        rel * mean
+                    } else {
+                        g.std_error / direct_mc.mean
+                    },
+                }
+            }
+            Err(_) => McEstimate::default(),
+        };
+        let bounds_share = ref_job.map(|g| g.energy_share);
+        let reference = match (ref_job, images.reference.as_mut()) {
+            (Some(job), Some(all)) => {
+                let img = draw_alone(system, aperture, frame, &ref_plan, job, band_by_band)?;
+                add_into(all, &img);
+                Some(ImageMoments::of(&img))
+            }
+            _ => None,
+        };
+        let preset_job = preset.ghosts.iter().find(|g| g.path == path);
+        let renderer = match preset_job {
+            Some(job) => {
+                let img = draw_alone(
+                    system,
+                    aperture,
+                    frame,
+                    &preset,
+                    job,
+                    RenderOptions::default(),
+                )?;
+                add_into(&mut images.renderer, &img);
+                Some(ImageMoments::of(&img))
+            }
+            None => None,
+        };
+        let dropped = preset
+            .dropped
+            .iter()
+            .find(|d| d.path == path)
+            .map(|d| d.reason);
+        rows.push(GhostRow {
+            path: path.to_string(),
+            mc_share,
+            bounds_share,
+            mc_energy: mc.as_ref().map(|m| m.flux_in_frame).unwrap_or_default(),
+            mc_centroid_px: mc.as_ref().map_or([f64::NAN; 2], |m| m.centroid_px),
+            mc_centroid_err_px: mc.as_ref().map_or([f64::NAN; 2], |m| m.centroid_err_px),
+            mc_moments_px2: mc.as_ref().map_or([f64::NAN; 3], |m| m.moments_px2),
+            mc_rays: mc.as_ref().map_or(0, |m| m.rays),
+            mc,
+            reference,
+            renderer,
+            dropped,
+        });
+    }
+    let rmse = |img: &HdrImage| {
+        img.relative_rmse(&images.mc.image)
+            .expect("images of the same frame")
+    };
+    let reference_rmse = images.reference.as_ref().map(rmse);
+    let renderer_rmse = rmse(&images.renderer);
+    let mc_noise = images.mc.relative_noise();
+    Ok(Crosscheck {
+        ghosts: rows,
+        direct_mc,
+        direct_bounds,
+        reference_rmse,
+        renderer_rmse,
+        mc_noise,
+        images,
+    })
+}
+
+fn add_into(all: &mut HdrImage, img: &HdrImage) {
+    for (p, q) in all.pixels.iter_mut().zip(&img.pixels) {
+        for c in 0..3 {
+            p[c] += q[c];
+        }
+    }
+}

@@ -1,0 +1,732 @@
+//! An independent reference for ghost energies and images: forward Monte-Carlo splatting.
+//!
+//! It shares neither the grids and meshing ([`super::grid`], [`super::triangles`]) nor the
+//! rasterizer nor the bounds search ([`super::bounds`]) with the renderer; only the lens model
+//! and the scalar f64 tracer ([`Sequence::trace_with_hits`], whose Fresnel/coating factors are
+//! evaluated exactly per ray, without the interface tables).
+//!
+//! **Where rays start.** A pilot grid of `pilot × pilot` vertices over the square that holds
+//! every ray entering the front element ([`entry_square`]) is traced at the shortest and the
+//! longest wavelength asked for. Each vertex has an excess `e = max(r/semi − 1, ρ_stop/ρ_open −
+//! 1)` (its largest relative radius along the path, and its stop crossing over the aperture's
+//! farthest open point); it passes where `e ≤ 0`. A cell is *active* when a corner passes, or
+//! when its smallest corner excess is at most twice the largest change of `e` along its
+//! edges (so a region that falls between the vertices, where `e` dips below 0 between them,
+//! is kept), or when a corner's ray stopped (missed a surface, total internal reflection) next
+//! to one of those; active cells are then grown by one cell all round. Flux outside the active
+//! cells is not sampled: that is the estimator's one assumption, and the pilot's resolution
+//! and the slack above are what it rests on.
+//!
+//! **Sampling.** Every active cell is split into `q × q` strata and each stratum gets one ray
+//! at a uniformly jittered point, per band and per batch; `q` is the largest that keeps the
+//! rays asked for (`q ≥ 1`). A ray that completes the path inside every clear semi-diameter
+//! carries the flux `E · cos θ · A_stratum · T · τ(stop)`: `T` the exact product of the
+//! Fresnel/coating factors along its path, `τ` the aperture's (hard-edged) transmission at its
+//! last stop crossing (the renderer's convention, `docs/physics.md`), and `E` the light's
+//! irradiance. The flux is added where it lands: to sums for the energy, the centroid and the
+//! second moments (in pixels of the frame, exactly where the ray lands) and, bilinearly, to an
+//! image in the band's colour — the same image units as the renderer (an image's sum is
+//! `Σ_band rgb · Φ_band`).
+//!
+//! **Error bar.** The `batches` batches are independent estimates (each has one ray per
+//! stratum, from its own random stream); the standard error of their mean is `s / √B`, `s` the
+//! batches' sample standard deviation. The random streams are seeded from the settings' seed,
+//! the ghost path, the band and the batch, so results do not depend on the thread count.
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use crate::aperture::Aperture;
+use crate::frame::Frame;
+use crate::image::HdrImage;
+use crate::system::LensSystem;
+use crate::trace::{Hit, Ray, Sequence};
+
+use super::bounds::Rect;
+use super::enumerate::GhostPath;
+
+/// Luminance weights of linear sRGB (Rec. 709), as the renderer counts a band's flux.
+const LUMINANCE: [f64; 3] = [0.2126, 0.7152, 0.0722];
+
+/// How many rays, in how many batches, from which seed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct McSettings {
+    /// Rays per ghost, over all its bands and batches (at least one per stratum is traced).
+    pub rays: usize,
+    /// Independent batches the error bar is measured from (at least 2).
+    pub batches: usize,
+    /// Seed of every random stream.
+    pub seed: u64,
+    /// Pilot grid vertices a side over the entry square.
+    pub pilot: usize,
+}
+
+impl Default for McSettings {
+    fn default() -> Self {
+        McSettings {
+            rays: 1 << 20,
+            batches: 16,
+            seed: 0x5eed,
+            pilot: 129,
+        }
+    }
+}
+
+/// A wavelength and the colour it adds (linear sRGB per unit flux, the renderer's band colour).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct McBand {
+    pub lambda_nm: f64,
+    pub rgb: [f32; 3],
+}
+
+/// A mean and its standard error.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct McEstimate {
+    pub mean: f64,
+    pub std_error: f64,
+}
+
+impl McEstimate {
+    /// The mean and standard error of independent estimates `values` (at least two).
+    pub fn of(values: &[f64]) -> McEstimate {
+        let n = values.len() as f64;
+        let mean = values.iter().sum::<f64>() / n;
+        let var = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0).max(1.0);
+        McEstimate {
+            mean,
+            std_error: (var / n).sqrt(),
+        }
+    }
+
+    /// The standard error relative to the mean (∞ for a zero mean).
+    pub fn relative_error(&self) -> f64 {
+        if self.mean != 0.0 {
+            (self.std_error / self.mean).abs()
+        } else {
+            f64::INFINITY
+        }
+    }
+}
+
+/// The cells of a pilot grid whose rays may carry the ghost's light.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct McRegion {
+    /// The square the pilot grid spans (entrance plane, meridional frame, mm).
+    pub square: Rect,
+    /// Vertices a side of the pilot grid (cells a side: `pilot − 1`).
+    pub pilot: usize,
+    /// Active cells `(i, j)` (i along x).
+    pub cells: Vec<(u32, u32)>,
+}
+
+impl McRegion {
+    /// Size of one cell (mm).
+    pub fn cell(&self) -> (f64, f64) {
+        let d = (self.pilot.max(2) - 1) as f64;
+        (self.square.width() / d, self.square.height() / d)
+    }
+
+    /// The entrance-plane area the active cells cover (mm²).
+    pub fn area(&self) -> f64 {
+        let (cw, ch) = self.cell();
+        self.cells.len() as f64 * cw * ch
+    }
+}
+
+/// One ghost's Monte-Carlo estimate.
+#[derive(Clone, Debug, PartialEq)]
+pub struct McGhost {
+    pub path: GhostPath,
+    /// Rays traced (over every band and batch).
+    pub rays: usize,
+    /// Active pilot cells and strata per cell a side.
+    pub cells: usize,
+    pub strata: usize,
+    /// Luminance-weighted flux of every ray that reaches the sensor (image units: an image of
+    /// the ghost alone sums to this, uncropped).
+    pub flux: McEstimate,
+    /// The same over the rays that land inside the frame.
+    pub flux_in_frame: McEstimate,
+    /// Flux-weighted centroid (pixels of the frame, x right, y down) of the rays in the frame,
+    /// and its standard error per axis.
+    pub centroid_px: [f64; 2],
+    pub centroid_err_px: [f64; 2],
+    /// Central second moments of the in-frame flux (px²): xx, xy, yy.
+    pub moments_px2: [f64; 3],
+    /// The bounding box of the entrance points of the rays that reached the sensor (meridional
+    /// frame, mm); `None` when none did.
+    pub entrance_span: Option<Rect>,
+}
+
+/// The image a Monte-Carlo run splats into, and the same from its even and odd batches apart
+/// (each of those at twice the weight, so each alone estimates the image): their difference
+/// measures the noise.
+#[derive(Clone, Debug)]
+pub struct McImages {
+    pub image: HdrImage,
+    pub halves: [HdrImage; 2],
+}
+
+impl McImages {
+    /// Black images of `frame`'s size.
+    pub fn new(frame: &Frame) -> McImages {
+        let black = || HdrImage::new(frame.width, frame.height);
+        McImages {
+            image: black(),
+            halves: [black(), black()],
+        }
+    }
+
+    fn add(&mut self, o: &McImages) {
+        add_pixels(&mut self.image, &o.image);
+        add_pixels(&mut self.halves[0], &o.halves[0]);
+        add_pixels(&mut self.halves[1], &o.halves[1]);
+    }
+
+    /// The noise of `image`: the relative RMSE between the two halves over two (each half has
+    /// twice the variance of the whole, their difference four times).
+    pub fn relative_noise(&self) -> f64 {
+        let (mut d2, mut b2) = (0.0_f64, 0.0_f64);
+        for ((p, a), b) in self
+            .image
+            .pixels
+            .iter()
+            .zip(&self.halves[0].pixels)
+            .zip(&self.halves[1].pixels)
+        {
+            for c in 0..3 {
+                let d = f64::from(a[c]) - f64::from(b[c]);
+                d2 += d * d;
+                b2 += f64::from(p[c]).powi(2);
+            }
+        }
+        if b2 > 0.0 {
+            0.5 * (d2 / b2).sqrt()
+        } else {
+            0.0
+        }
+    }
+}
+
+fn add_pixels(a: &mut HdrImage, b: &HdrImage) {
+    for (p, q) in a.pixels.iter_mut().zip(&b.pixels) {
+        for c in 0..3 {
+            p[c] += q[c];
+        }
+    }
+}
+
+/// The square on the entrance plane (z = 0) holding every ray that can meet the front element
+/// at `theta`: its semi-diameter grown by 5% and by how far an oblique ray moves across the
+/// front surface's sag.
+pub fn entry_square(system: &LensSystem, theta: f64) -> Rect {
+    let s0 = &system.surfaces[0];
+    let sag = s0.sag(s0.semi_diameter).unwrap_or(0.0).abs();
+    let h = s0.semi_diameter * 1.05 + sag * theta.tan().abs();
+    Rect::square(0.0, 0.0, h)
+}
+
+/// The largest normalised stop radius the aperture is open at: 1 for the circle and an iris
+/// (inscribed in it), √2 for a mask over [-1, 1]².
+fn aperture_reach(aperture: &Aperture) -> f64 {
+    match aperture {
+        Aperture::Mask(_) => std::f64::consts::SQRT_2,
+        _ => 1.0,
+    }
+}
+
+/// Index into a trace's hits of `seq`'s recorded stop crossing (its last pass), if any.
+fn stop_hit(seq: &Sequence<f64>) -> Option<usize> {
+    seq.steps.iter().rposition(|s| s.record_stop)
+}
+
+/// The active cells of the pilot grids of `seqs` (one per wavelength, each with its stop
+/// unclipped at the recorded crossing, which is tested against `reach` × the stop radius
+/// instead) at `theta`.
+pub fn active_region(
+    seqs: &[Sequence<f64>],
+    theta: f64,
+    square: Rect,
+    pilot: usize,
+    stop_radius: f64,
+    reach: f64,
+) -> McRegion {
+    let n = pilot.max(3);
+    let cells = n - 1;
+    let mut active = vec![false; cells * cells];
+    let (s, c) = theta.sin_cos();
+    let d = (n - 1) as f64;
+    for seq in seqs {
+        let stop = stop_hit(seq);
+        // One pilot row per task: no shared state but the row's excesses.
+        let excess: Vec<f64> = (0..n * n)
+            .into_par_iter()
+            .map_init(Vec::new, |hits: &mut Vec<Hit>, k| {
+                let (i, j) = (k % n, k / n);
+                let x = square.x0 + square.width() * i as f64 / d;
+                let y = square.y0 + square.height() * j as f64 / d;
+                hits.clear();
+                let r = seq.trace_with_hits(
+                    &Ray::new(DVec3::new(x, y, 0.0), DVec3::new(0.0, s, c)),
+                    hits,
+                );
+                if !r.completed {
+                    return f64::INFINITY;
+                }
+                let rho = stop
+                    .and_then(|h| hits.get(h))
+                    .map_or(0.0, |h| h.position.truncate().length() / stop_radius);
+                (r.max_relative_radius - 1.0).max(rho / reach - 1.0)
+            })
+            .collect();
+        for j in 0..cells {
+            for i in 0..cells {
+                let k = [
+                    j * n + i,
+                    j * n + i + 1,
+                    (j + 1) * n + i,
+                    (j + 1) * n + i + 1,
+                ];
+                let e = k.map(|v| excess[v]);
+                let min = e.iter().copied().fold(f64::INFINITY, f64::min);
+                // The largest change of e along the cell's edges (finite corners only).
+                let edges = [(0, 1), (2, 3), (0, 2), (1, 3)];
+                let slope = edges
+                    .iter()
+                    .filter(|(a, b)| e[*a].is_finite() && e[*b].is_finite())
+                    .map(|(a, b)| (e[*a] - e[*b]).abs())
+                    .fold(0.0, f64::max);
+                let stopped = e.iter().any(|v| !v.is_finite());
+                let near = min <= 2.0 * slope || (stopped && min <= 0.5);
+                if min <= 0.0 || near {
+                    active[j * cells + i] = true;
+                }
+            }
+        }
+    }
+    // Grown by one cell all round.
+    let mut grown = active.clone();
+    for j in 0..cells {
+        for i in 0..cells {
+            if !active[j * cells + i] {
+                continue;
+            }
+            for jj in j.saturating_sub(1)..=(j + 1).min(cells - 1) {
+                for ii in i.saturating_sub(1)..=(i + 1).min(cells - 1) {
+                    grown[jj * cells + ii] = true;
+                }
+            }
+        }
+    }
+    McRegion {
+        square,
+        pilot: n,
+        cells: (0..cells * cells)
+            .filter(|&k| grown[k])
+            .map(|k| ((k % cells) as u32, (k / cells) as u32))
+            .collect(),
+    }
+}
+
+/// A small, fast generator (SplitMix64, Steele, Lea & Flood 2014): good enough for jitter,
+/// and seeded per stream so that results do not depend on scheduling.
+#[derive(Clone, Copy, Debug)]
+struct SplitMix64(u64);
+
+impl SplitMix64 {
+    fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+
+    /// Uniform in [0, 1).
+    fn next_f64(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+    }
+
+    /// The stream for these keys.
+    fn stream(keys: &[u64]) -> SplitMix64 {
+        let mut g = SplitMix64(0);
+        for &k in keys {
+            g.0 ^= k;
+            g.0 = g.next_u64();
+        }
+        g
+    }
+}
+
+/// What one batch of one band adds up (image units, pixels).
+#[derive(Clone, Copy, Debug, Default)]
+struct Sums {
+    flux: f64,
+    flux_in: f64,
+    x: f64,
+    y: f64,
+    xx: f64,
+    xy: f64,
+    yy: f64,
+}
+
+/// A ray that carries light: its entrance point, landing (sensor mm, meridional frame), stop
+/// crossing over the stop radius (meridional frame) and throughput.
+#[derive(Clone, Copy, Debug)]
+struct Landed {
+    entrance: [f64; 2],
+    sensor: [f64; 2],
+    stop_uv: [f64; 2],
+    throughput: f64,
+}
+
+/// Traces the strata of `region` for one batch of `seq`, calling `f` for every ray that
+/// completes the path inside every clear semi-diameter; `hits` is the caller's buffer.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "one batch's whole description, private"
+)]
+fn sample_batch(
+    seq: &Sequence<f64>,
+    stop: Option<usize>,
+    stop_radius: f64,
+    theta: f64,
+    region: &McRegion,
+    q: usize,
+    rng: &mut SplitMix64,
+    hits: &mut Vec<Hit>,
+    mut f: impl FnMut(Landed),
+) {
+    let (s, c) = theta.sin_cos();
+    let dir = DVec3::new(0.0, s, c);
+    let (cw, ch) = region.cell();
+    let (sw, sh) = (cw / q as f64, ch / q as f64);
+    for &(i, j) in &region.cells {
+        let x0 = region.square.x0 + i as f64 * cw;
+        let y0 = region.square.y0 + j as f64 * ch;
+        for sj in 0..q {
+            for si in 0..q {
+                let x = x0 + (si as f64 + rng.next_f64()) * sw;
+                let y = y0 + (sj as f64 + rng.next_f64()) * sh;
+                hits.clear();
+                let r = seq.trace_with_hits(&Ray::new(DVec3::new(x, y, 0.0), dir), hits);
+                if !r.completed || r.max_relative_radius > 1.0 {
+                    continue;
+                }
+                let stop_uv = stop.and_then(|h| hits.get(h)).map_or([0.0, 0.0], |h| {
+                    [h.position.x / stop_radius, h.position.y / stop_radius]
+                });
+                f(Landed {
+                    entrance: [x, y],
+                    sensor: [r.ray.origin.x, r.ray.origin.y],
+                    stop_uv,
+                    throughput: r.throughput,
+                });
+            }
+        }
+    }
+}
+
+/// Strata per cell a side for `rays` over `cells` cells, `bands` bands and `batches` batches.
+fn strata(rays: usize, cells: usize, bands: usize, batches: usize) -> usize {
+    let per_cell = rays as f64 / (cells.max(1) * bands.max(1) * batches.max(1)) as f64;
+    (per_cell.sqrt().floor() as usize).max(1)
+}
+
+/// The Monte-Carlo estimate of ghost `path` lit by a light at `theta`, `phi` (radians) of
+/// irradiance `irradiance`, at `bands` (each traced, in its colour), seen through `aperture`
+/// in `frame`; splatted into `images` when given (added to what they hold).
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the scene, the ghost and the settings"
+)]
+pub fn ghost_monte_carlo(
+    system: &LensSystem,
+    aperture: &Aperture,
+    frame: &Frame,
+    path: GhostPath,
+    light: (f64, f64, f64),
+    bands: &[McBand],
+    settings: &McSettings,
+    images: Option<&mut McImages>,
+) -> Option<McGhost> {
+    let (theta, phi, irradiance) = light;
+    let stop_radius = crate::paraxial::stop_opening(system);
+    let seqs: Vec<Sequence<f64>> = bands
+        .iter()
+        .map(|b| {
+            Sequence::ghost_path(system, b.lambda_nm, &path)
+                .ok()
+                .map(Sequence::aperture_by_mask)
+        })
+        .collect::<Option<_>>()?;
+    if seqs.is_empty() {
+        return None;
+    }
+    // The pilot at the band ends (the ghost's entry region moves with the wavelength).
+    let ends: Vec<Sequence<f64>> = if seqs.len() > 1 {
+        vec![seqs[0].clone(), seqs[seqs.len() - 1].clone()]
+    } else {
+        vec![seqs[0].clone()]
+    };
+    let region = active_region(
+        &ends,
+        theta,
+        entry_square(system, theta),
+        settings.pilot,
+        stop_radius,
+        aperture_reach(aperture),
+    );
+    let batches = settings.batches.max(2);
+    let q = strata(settings.rays, region.cells.len(), bands.len(), batches);
+    let (cw, ch) = region.cell();
+    let stratum_flux = cw * ch / (q * q) as f64 * theta.cos() * irradiance;
+    let (sphi, cphi) = phi.sin_cos();
+    let sampler = aperture.sampler();
+    let (w, h) = (frame.width as f64, frame.height as f64);
+    let to_px = |p: [f64; 2]| {
+        // Meridional frame → the lens's (turned by φ) → pixels (photograph orientation).
+        let (x, y) = (p[0] * cphi - p[1] * sphi, p[0] * sphi + p[1] * cphi);
+        [
+            (0.5 - x / frame.film_width_mm) * w,
+            (0.5 + y / frame.film_height_mm) * h,
+        ]
+    };
+    let key = path
+        .reflections()
+        .iter()
+        .fold(0u64, |k, &s| k.wrapping_mul(131).wrapping_add(s as u64 + 1));
+    let want_images = images.is_some();
+    let jobs: Vec<(usize, usize)> = (0..bands.len())
+        .flat_map(|b| (0..batches).map(move |k| (b, k)))
+        .collect();
+    // Each task: one band's batch; per thread, its hit buffer, images and the span of the
+    // entrance points that carried light.
+    type Acc = (Vec<(usize, Sums)>, Option<McImages>, Option<Rect>, Vec<Hit>);
+    let init = || -> Acc {
+        (
+            Vec::new(),
+            want_images.then(|| McImages::new(frame)),
+            None,
+            Vec::with_capacity(64),
+        )
+    };
+    let (sums, img, span, _) = jobs
+        .par_iter()
+        .fold(init, |mut acc, &(b, k)| {
+            let band = &bands[b];
+            let rgb = band.rgb.map(f64::from);
+            let lum = LUMINANCE[0] * rgb[0] + LUMINANCE[1] * rgb[1] + LUMINANCE[2] * rgb[2];
+            let mut rng = SplitMix64::stream(&[settings.seed, key, b as u64, k as u64]);
+            let mut s = Sums::default();
+            let (list, images, span, hits) = &mut acc;
+            let stop = stop_hit(&seqs[b]);
+            sample_batch(
+                &seqs[b],
+                stop,
+                stop_radius,
+                theta,
+                &region,
+                q,
+                &mut rng,
+                hits,
+                |l| {
+                    let [u, v] = l.stop_uv;
+                    let uv = [u * cphi - v * sphi, u * sphi + v * cphi];
+                    let tau = f64::from(sampler.transmission(uv[0] as f32, uv[1] as f32));
+                    let flux = stratum_flux * l.throughput * tau;
+                    if flux <= 0.0 {
+                        return;
+                    }
+                    let e = [l.entrance[0], l.entrance[1]];
+                    let p = Rect {
+                        x0: e[0],
+                        y0: e[1],
+                        x1: e[0],
+                        y1: e[1],
+                    };
+                    *span = Some(span.map_or(p, |r| r.union(&p)));
+                    let f = flux * lum;
+                    s.flux += f;
+                    let [px, py] = to_px(l.sensor);
+                    if px >= 0.0 && px < w && py >= 0.0 && py < h {
+                        s.flux_in += f;
+                        s.x += f * px;
+                        s.y += f * py;
+                        s.xx += f * px * px;
+                        s.xy += f * px * py;
+                        s.yy += f * py * py;
+                    }
+                    if let Some(im) = images.as_mut() {
+                        let scale = 1.0 / batches as f64;
+                        let e = rgb.map(|c| c * flux * scale);
+                        splat(&mut im.image, px, py, e);
+                        splat(&mut im.halves[k % 2], px, py, e.map(|c| 2.0 * c));
+                    }
+                },
+            );
+            list.push((b * batches + k, s));
+            acc
+        })
+        .reduce(init, |mut a, b| {
+            a.0.extend(b.0);
+            match (&mut a.1, &b.1) {
+                (Some(x), Some(y)) => x.add(y),
+                (None, Some(_)) => a.1 = b.1,
+                _ => {}
+            }
+            a.2 = match (a.2, b.2) {
+                (Some(x), Some(y)) => Some(x.union(&y)),
+                (x, y) => x.or(y),
+            };
+            a
+        });
+    if let (Some(out), Some(img)) = (images, img) {
+        out.add(&img);
+    }
+    // Per batch, summed over bands in band order (the same bits however the tasks ran).
+    let mut sums = sums;
+    sums.sort_by_key(|(idx, _)| *idx);
+    let mut per_batch = vec![Sums::default(); batches];
+    for (idx, s) in sums {
+        let t = &mut per_batch[idx % batches];
+        t.flux += s.flux;
+        t.flux_in += s.flux_in;
+        t.x += s.x;
+        t.y += s.y;
+        t.xx += s.xx;
+        t.xy += s.xy;
+        t.yy += s.yy;
+    }
+    let total = per_batch.iter().fold(Sums::default(), |mut t, s| {
+        t.flux += s.flux;
+        t.flux_in += s.flux_in;
+        t.x += s.x;
+        t.y += s.y;
+        t.xx += s.xx;
+        t.xy += s.xy;
+        t.yy += s.yy;
+        t
+    });
+    let est = |f: fn(&Sums) -> f64| McEstimate::of(&per_batch.iter().map(f).collect::<Vec<_>>());
+    let (centroid, centroid_err, moments) = if total.flux_in > 0.0 {
+        let c = [total.x / total.flux_in, total.y / total.flux_in];
+        let err = |f: fn(&Sums) -> f64| {
+            let v: Vec<f64> = per_batch
+                .iter()
+                .filter(|s| s.flux_in > 0.0)
+                .map(|s| f(s) / s.flux_in)
+                .collect();
+            if v.len() >= 2 {
+                McEstimate::of(&v).std_error
+            } else {
+                f64::INFINITY
+            }
+        };
+        (
+            c,
+            [err(|s| s.x), err(|s| s.y)],
+            [
+                total.xx / total.flux_in - c[0] * c[0],
+                total.xy / total.flux_in - c[0] * c[1],
+                total.yy / total.flux_in - c[1] * c[1],
+            ],
+        )
+    } else {
+        ([f64::NAN; 2], [f64::NAN; 2], [f64::NAN; 3])
+    };
+    // Each batch estimates the whole flux: their mean and its standard error.
+    let flux = est(|s| s.flux);
+    let flux_in = est(|s| s.flux_in);
+    Some(McGhost {
+        path,
+        rays: region.cells.len() * q * q * bands.len() * batches,
+        cells: region.cells.len(),
+        strata: q,
+        flux,
+        flux_in_frame: flux_in,
+        centroid_px: centroid,
+        centroid_err_px: centroid_err,
+        moments_px2: moments,
+        entrance_span: span,
+    })
+}
+
+/// Adds `e` at pixel position (`px`, `py`) (pixel centres at half-integers) to its four
+/// nearest pixels, bilinearly; what falls outside the image is dropped.
+fn splat(img: &mut HdrImage, px: f64, py: f64, e: [f64; 3]) {
+    let (fx, fy) = (px - 0.5, py - 0.5);
+    if !(fx > -1.0 && fy > -1.0 && fx < img.width as f64 && fy < img.height as f64) {
+        return;
+    }
+    let (x0, y0) = (fx.floor(), fy.floor());
+    let (tx, ty) = (fx - x0, fy - y0);
+    let (x0, y0) = (x0 as i64, y0 as i64);
+    for (dy, wy) in [(0, 1.0 - ty), (1, ty)] {
+        for (dx, wx) in [(0, 1.0 - tx), (1, tx)] {
+            let (x, y) = (x0 + dx, y0 + dy);
+            if x < 0 || y < 0 || x >= img.width as i64 || y >= img.height as i64 {
+                continue;
+            }
+            let p = &mut img.pixels[y as usize * img.width + x as usize];
+            for c in 0..3 {
+                p[c] += (e[c] * wx * wy) as f32;
+            }
+        }
+    }
+}
+
+/// The flux (mm², for unit irradiance) that `seq` carries to the sensor at `theta`, at its
+/// wavelength, through the stop clipped at its working radius (no aperture shape: the
+/// convention of the bounds' energy shares), with every Fresnel/coating factor exact: the
+/// Monte-Carlo counterpart of `bounds::direct_flux` (with `Sequence::forward`) and of a
+/// ghost's flux behind its energy share (with `Sequence::ghost_path`).
+pub fn path_flux(
+    system: &LensSystem,
+    seq: &Sequence<f64>,
+    theta: f64,
+    settings: &McSettings,
+) -> McEstimate {
+    let stop_radius = crate::paraxial::stop_opening(system);
+    let region = active_region(
+        std::slice::from_ref(seq),
+        theta,
+        entry_square(system, theta),
+        settings.pilot,
+        stop_radius,
+        1.0,
+    );
+    let batches = settings.batches.max(2);
+    let q = strata(settings.rays, region.cells.len(), 1, batches);
+    let (cw, ch) = region.cell();
+    let stratum_flux = cw * ch / (q * q) as f64 * theta.cos();
+    let key = seq.steps.len() as u64;
+    let values: Vec<f64> = (0..batches)
+        .into_par_iter()
+        .map_init(
+            || Vec::with_capacity(64),
+            |hits, k| {
+                let mut rng = SplitMix64::stream(&[settings.seed, key, u64::MAX, k as u64]);
+                let mut sum = 0.0;
+                sample_batch(
+                    seq,
+                    None,
+                    stop_radius,
+                    theta,
+                    &region,
+                    q,
+                    &mut rng,
+                    hits,
+                    |l| {
+                        sum += stratum_flux * l.throughput;
+                    },
+                );
+                sum
+            },
+        )
+        .collect();
+    McEstimate::of(&values)
+}
+
+#[cfg(test)]
+mod tests;
