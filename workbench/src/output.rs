@@ -150,6 +150,20 @@ pub enum ExrPrecision {
 }
 
 /// Saves `img` to `path` as EXR (f32) or PNG (by extension), atomically.
+/// A file-name stem made from `text`: ASCII letters and digits in lower case, every run of
+/// other characters one `-`, none at either end (empty when `text` has no letter or digit).
+pub fn file_stem(text: &str) -> String {
+    let mut s = String::with_capacity(text.len());
+    for c in text.chars() {
+        if c.is_ascii_alphanumeric() {
+            s.push(c.to_ascii_lowercase());
+        } else if !s.is_empty() && !s.ends_with('-') {
+            s.push('-');
+        }
+    }
+    s.trim_end_matches('-').to_string()
+}
+
 pub fn save_image(img: &HdrImage, path: &Path, tone: &ToneMap) -> Result<()> {
     save_image_as(img, path, tone, ExrPrecision::Float)
 }
@@ -324,6 +338,17 @@ fn check_size(img: &HdrImage) -> Result<()> {
 mod tests {
     use super::*;
     use std::fs;
+
+    #[test]
+    fn file_stems_keep_letters_and_digits_and_one_dash_between() {
+        assert_eq!(file_stem("Heliar-Tronnier"), "heliar-tronnier");
+        assert_eq!(file_stem("  Nikon 28–70 mm / f2.8 "), "nikon-28-70-mm-f2-8");
+        assert_eq!(
+            file_stem("heliar-tronnier-10.5-30"),
+            "heliar-tronnier-10-5-30"
+        );
+        assert_eq!(file_stem("°°"), "");
+    }
 
     /// A fresh directory, removed when the returned `TempDir` is dropped.
     fn temp_dir(tag: &str) -> tempfile::TempDir {

@@ -412,12 +412,13 @@ impl<'p, 'o> Planner<'p, 'o> {
                 dropped.push(drop(DropReason::OffFrame));
                 continue;
             }
-            if opts.cull && visible(&b) < dim_below {
-                culled_visible += visible(&b);
+            let share = visible(&b);
+            if opts.cull && share < dim_below {
+                culled_visible += share;
                 dropped.push(drop(DropReason::Dim));
                 continue;
             }
-            kept_visible += visible(&b);
+            kept_visible += share;
             ghosts.push(self.ghost_job(path, b, &job, &mut bins));
         }
         // A four-reflection ghost's bound is all its energy might be, on the frame or not.

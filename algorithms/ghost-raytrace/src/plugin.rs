@@ -47,33 +47,33 @@ pub fn light_specs(scene: &Scene) -> Vec<LightSpec> {
 pub fn plan_options(params: &Params<'_>) -> Result<PlanOptions<'static>, PluginError> {
     let quality = Quality::ALL[params.get_choice("quality")?.min(2)];
     let mut opts = PlanOptions::for_quality(quality, None);
-    let bands = params.get_int("bands")?;
-    if bands > 0 {
-        opts.bands = bands as usize;
+    // Each setting's value when positive; 0 keeps the preset's (−1 for `dim_budget`, which
+    // may be 0).
+    let positive = |name: &str| -> Result<Option<f64>, PluginError> {
+        let v = params.get(name)?;
+        Ok((v > 0.0).then_some(v))
+    };
+    if let Some(b) = positive("bands")? {
+        opts.bands = b.round() as usize;
     }
-    let scale = params.get("grid_scale")?;
-    if scale > 0.0 {
-        opts.grid_scale = scale;
+    if let Some(v) = positive("grid_scale")? {
+        opts.grid_scale = v;
     }
-    let smooth = params.get("smooth_grid_scale")?;
-    if smooth > 0.0 {
-        opts.smooth_grid_scale = smooth;
+    if let Some(v) = positive("smooth_grid_scale")? {
+        opts.smooth_grid_scale = v;
     }
     let budget = params.get("dim_budget")?;
     if budget >= 0.0 {
         opts.dim_budget = budget;
     }
-    let spacing = params.get("band_spacing")?;
-    if spacing > 0.0 {
-        opts.band_spacing_px = spacing;
+    if let Some(v) = positive("band_spacing")? {
+        opts.band_spacing_px = v;
     }
-    let coarse = params.get("coarse_px")?;
-    if coarse > 0.0 {
-        opts.coarse_pixels_per_radius = coarse;
+    if let Some(v) = positive("coarse_px")? {
+        opts.coarse_pixels_per_radius = v;
     }
-    let downscale = params.get_int("max_downscale")?;
-    if downscale > 0 {
-        opts.max_downscale = downscale as usize;
+    if let Some(d) = positive("max_downscale")? {
+        opts.max_downscale = d.round() as usize;
     }
     opts.reflections = match params.get_choice("reflections")? {
         0 => ReflectionOrder::Two,

@@ -207,7 +207,7 @@ impl Quality {
 
     /// The share of the ghosts' energy on the frame that may be left out: the dimmest
     /// ghosts are dropped, dimmest first, while together they carry at most this much
-    /// ([`crate::plan::dim_threshold`]). Measured on the Nikon zoom (480×270, light 10°, 30°,
+    /// ([`crate::plan::dim_threshold`]; each ghost weighed by [`crate::plan::on_frame_share`]). Measured on the Nikon zoom (480×270, light 10°, 30°,
     /// 31 bands): a fixed cut at 1e-6 of the direct image's energy dropped 83 of 210 ghosts
     /// and 3.2% of the ghost energy, which alone made 2.2% of the default's error. The
     /// default's 1e-3, against 3e-3 (light 10°, 30°): Nikon zoom at 960 × 540 1.872% against

@@ -20,7 +20,7 @@ use super::render::{IrisArgs, auto_exposure, frame_for, parse_size};
 use crate::backend::{BackendChoice, GhostBackend};
 use crate::lens_library;
 use crate::output::{ToneMap, ToneOperator, save_image};
-use crate::sweep::measure::{self, Scene1, params_of};
+use crate::sweep::measure::{self, CaseScene, params_of};
 use crate::sweep::points::{self, Point, Vary, split_algo};
 use crate::sweep::sheet::{THUMB_WIDTH, Tile, contact_sheet, thumbnail};
 use crate::sweep::store::Store;
@@ -95,7 +95,11 @@ fn today() -> String {
     let days = SystemTime::now()
         .duration_since(UNIX_EPOCH)
         .map_or(0, |d| d.as_secs() / 86_400) as i64;
-    // Days since 1970-01-01 to a proleptic Gregorian date (eras of 400 years).
+    civil_date(days)
+}
+
+/// The proleptic Gregorian date `days` after 1970-01-01 (counted in eras of 400 years).
+fn civil_date(days: i64) -> String {
     let z = days + 719_468;
     let era = z.div_euclid(146_097);
     let doe = z - era * 146_097;
@@ -179,7 +183,7 @@ pub fn run(args: &SweepArgs, quiet: bool) -> anyhow::Result<()> {
                 height: frame.height,
                 aperture: aperture_text(&aperture),
             };
-            let scene = Scene1 {
+            let scene = CaseScene {
                 system: &sys,
                 tables: &tables,
                 aperture: &aperture,
@@ -455,4 +459,18 @@ fn write_case_files(store: &Store, case: &CaseResult) -> anyhow::Result<()> {
             operator: ToneOperator::Aces,
         },
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::civil_date;
+
+    #[test]
+    fn days_since_1970_as_dates() {
+        assert_eq!(civil_date(0), "1970-01-01");
+        assert_eq!(civil_date(59), "1970-03-01");
+        assert_eq!(civil_date(11_016), "2000-02-29");
+        assert_eq!(civil_date(20_791), "2026-12-04");
+        assert_eq!(civil_date(-1), "1969-12-31");
+    }
 }

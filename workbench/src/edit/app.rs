@@ -768,17 +768,7 @@ pub fn describe(edit: &Edit) -> String {
 
 /// A file name made from a lens name: lower case, spaces and odd characters as `-`, `.xml`.
 fn default_save_name(name: &str) -> String {
-    let mut s: String = name
-        .chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() {
-                c.to_ascii_lowercase()
-            } else {
-                '-'
-            }
-        })
-        .collect();
-    s = s.trim_matches('-').to_string();
+    let mut s = crate::output::file_stem(name);
     if s.is_empty() {
         s = "lens".into();
     }

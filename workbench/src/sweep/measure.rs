@@ -48,7 +48,7 @@ pub fn params_of(name: &str, plugins: &[PathBuf]) -> Result<Vec<ParamInfo>> {
 
 /// One case's scene, as every cell of it renders it.
 #[derive(Debug)]
-pub struct Scene1<'a> {
+pub struct CaseScene<'a> {
     pub system: &'a LensSystem,
     pub tables: &'a LensTables,
     pub aperture: &'a Aperture,
@@ -57,7 +57,7 @@ pub struct Scene1<'a> {
 }
 
 /// The reference of a scene, ghost by ghost (its `key` left for the caller to fill).
-pub fn reference(scene: &Scene1<'_>) -> Result<(ReferenceRecord, HdrImage)> {
+pub fn reference(scene: &CaseScene<'_>) -> Result<(ReferenceRecord, HdrImage)> {
     let t = Instant::now();
     let (ghosts, img) = reference_by_ghost(
         scene.system,
@@ -107,7 +107,7 @@ fn param_text(info: &[ParamInfo], values: &[f64]) -> String {
 
 /// Times `point` on the scene: one warm-up run, then `runs` timed ones, drawn by `backend`.
 pub fn measure(
-    scene: &Scene1<'_>,
+    scene: &CaseScene<'_>,
     point: &Point,
     runs: usize,
     backend: &mut GhostBackend,
@@ -122,7 +122,7 @@ pub fn measure(
 }
 
 fn measure_builtin(
-    scene: &Scene1<'_>,
+    scene: &CaseScene<'_>,
     text: &str,
     runs: usize,
     backend: &mut GhostBackend,
@@ -183,7 +183,7 @@ fn measure_builtin(
 }
 
 fn measure_plugin(
-    scene: &Scene1<'_>,
+    scene: &CaseScene<'_>,
     name: &str,
     text: &str,
     runs: usize,

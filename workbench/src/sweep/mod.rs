@@ -56,21 +56,10 @@ pub struct CaseInfo {
 impl CaseInfo {
     /// A name for the case's files: lens and light, letters, digits and `-` only.
     pub fn slug(&self) -> String {
-        let raw = format!("{}-{}-{}", self.lens, self.theta_deg, self.phi_deg);
-        let mut s: String = raw
-            .chars()
-            .map(|c| {
-                if c.is_ascii_alphanumeric() {
-                    c.to_ascii_lowercase()
-                } else {
-                    '-'
-                }
-            })
-            .collect();
-        while s.contains("--") {
-            s = s.replace("--", "-");
-        }
-        s.trim_matches('-').to_string()
+        crate::output::file_stem(&format!(
+            "{}-{}-{}",
+            self.lens, self.theta_deg, self.phi_deg
+        ))
     }
 
     pub fn title(&self) -> String {

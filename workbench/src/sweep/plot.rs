@@ -4,7 +4,7 @@
 //! Light font egui bundles, so no system font is needed.
 
 use std::path::Path;
-use std::sync::Once;
+use std::sync::OnceLock;
 
 use anyhow::{Result, anyhow};
 use plotters::coord::Shift;
@@ -30,22 +30,25 @@ const COLOURS: [RGBColor; 8] = [
     RGBColor(100, 100, 100),
 ];
 
-fn register_font() {
-    static ONCE: Once = Once::new();
-    ONCE.call_once(|| {
-        // The bytes are a valid TrueType font bundled by epaint_default_fonts; a failure here
-        // would only leave the plot without text, which the PNG test catches.
-        let _ = plotters::style::register_font(
-            FONT,
-            FontStyle::Normal,
-            epaint_default_fonts::UBUNTU_LIGHT,
-        );
-    });
+/// Registers the bundled font for plotters' text, once; an error if the font is refused.
+fn register_font() -> Result<()> {
+    static REGISTERED: OnceLock<Result<(), String>> = OnceLock::new();
+    REGISTERED
+        .get_or_init(|| {
+            plotters::style::register_font(
+                FONT,
+                FontStyle::Normal,
+                epaint_default_fonts::UBUNTU_LIGHT,
+            )
+            .map_err(|_| "not a TrueType font plotters can read".to_string())
+        })
+        .clone()
+        .map_err(|e| anyhow!("the plot's font (Ubuntu Light) was refused: {e}"))
 }
 
 /// The plot of `case` as an SVG document.
 pub fn svg(case: &CaseResult) -> Result<String> {
-    register_font();
+    register_font()?;
     let mut s = String::new();
     {
         let root = SVGBackend::with_string(&mut s, (WIDTH, HEIGHT)).into_drawing_area();
@@ -58,7 +61,7 @@ pub fn svg(case: &CaseResult) -> Result<String> {
 
 /// The plot of `case` as 8-bit RGB pixels, `WIDTH × HEIGHT`.
 pub fn rgb(case: &CaseResult) -> Result<Vec<u8>> {
-    register_font();
+    register_font()?;
     let mut buf = vec![255u8; (WIDTH * HEIGHT * 3) as usize];
     {
         let root = BitMapBackend::with_buffer(&mut buf, (WIDTH, HEIGHT)).into_drawing_area();

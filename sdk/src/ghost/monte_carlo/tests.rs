@@ -56,23 +56,27 @@ fn white() -> [McBand; 1] {
     }]
 }
 
+/// The plate's ghost 2-1 by the Monte-Carlo reference, at light direction `light` (θ, φ,
+/// intensity), on a `px × px` frame over the plate's 20 mm film, with `rays` rays.
+fn plate_ghost(px: usize, light: (f64, f64, f64), rays: usize) -> McGhost {
+    ghost_monte_carlo(
+        &plate(),
+        &Aperture::Circular,
+        &Frame::across_film(px, px, 20.0),
+        GhostPath::two(2, 1),
+        light,
+        &white(),
+        &settings(rays),
+        None,
+    )
+    .expect("the plate's ghost has a sequence")
+}
+
 #[test]
 fn plate_ghost_flux_matches_the_fresnel_product_within_its_error_bar() {
-    let sys = plate();
-    let frame = Frame::across_film(64, 64, 20.0);
     for theta_deg in [0.0_f64, 20.0] {
         let theta = theta_deg.to_radians();
-        let g = ghost_monte_carlo(
-            &sys,
-            &Aperture::Circular,
-            &frame,
-            GhostPath::two(2, 1),
-            (theta, 0.0, 1.0),
-            &white(),
-            &settings(200_000),
-            None,
-        )
-        .expect("the plate's ghost has a sequence");
+        let g = plate_ghost(64, (theta, 0.0, 1.0), 200_000);
         let exact = plate_ghost_flux(theta);
         let err = (g.flux.mean - exact).abs();
         assert!(
@@ -108,19 +112,7 @@ fn plate_direct_flux_matches_the_stop_area_times_two_transmittances() {
 fn a_wrong_closed_form_is_caught() {
     // The same ghost against the flux with one reflectance left out of the product (the
     // test above must be able to fail): far outside the error bar.
-    let sys = plate();
-    let frame = Frame::across_film(64, 64, 20.0);
-    let g = ghost_monte_carlo(
-        &sys,
-        &Aperture::Circular,
-        &frame,
-        GhostPath::two(2, 1),
-        (0.0, 0.0, 1.0),
-        &white(),
-        &settings(50_000),
-        None,
-    )
-    .expect("the plate's ghost has a sequence");
+    let g = plate_ghost(64, (0.0, 0.0, 1.0), 50_000);
     let wrong = plate_ghost_flux(0.0) * 1.01;
     assert!((g.flux.mean - wrong).abs() > SIGMAS * g.flux.std_error);
 }
@@ -129,19 +121,7 @@ fn a_wrong_closed_form_is_caught() {
 fn the_plate_ghost_lands_centred_with_the_stop_s_second_moments() {
     // On axis the ghost is the stop's disc (radius 2 mm) on the sensor: centroid at the
     // image centre, second moments r²/4 per axis, none across.
-    let sys = plate();
-    let frame = Frame::across_film(100, 100, 20.0);
-    let g = ghost_monte_carlo(
-        &sys,
-        &Aperture::Circular,
-        &frame,
-        GhostPath::two(2, 1),
-        (0.0, 0.0, 1.0),
-        &white(),
-        &settings(200_000),
-        None,
-    )
-    .expect("the plate's ghost has a sequence");
+    let g = plate_ghost(100, (0.0, 0.0, 1.0), 200_000);
     let px = 100.0 / 20.0;
     let var = 4.0 / 4.0 * px * px;
     for a in 0..2 {
