@@ -54,8 +54,11 @@ pub const REFERENCE_GRID_SCALE: f64 = 10.0;
 /// as its dispersion needs (an eighth of a pixel apart, 31 to 160), each band's colour its exact
 /// share of the 5 nm cells it spans. 4: bounds that follow a ghost's thin parts and find its
 /// small entry regions (`ghost::bounds`: `edge_dips`, `zoom`), energies measured over the
-/// pupil — ghosts the reference had cut or missed.
-pub const REFERENCE_VERSION: u32 = 4;
+/// pupil — ghosts the reference had cut or missed. 5: Fresnel tables of light leaving the
+/// denser medium tabulated in the refracted cosine (`trace::InterfaceTable`: exact near the
+/// critical angle), grids refined where the throughput changes fast
+/// (`bounds::grid_for_spread`), small pupils found (`bounds::direct_flux`).
+pub const REFERENCE_VERSION: u32 = 5;
 
 /// A text naming everything the reference image depends on: the renderer's version and
 /// settings, the reflection order, the lens (fingerprint of its canonical XML), the aperture, the frame and every

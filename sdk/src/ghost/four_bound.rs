@@ -167,11 +167,10 @@ fn pair_bounds(
                 // The reflectance toward the object at `d`; a surface without a table
                 // reflects with weight 1 on a traced path (its step leaves the weight alone).
                 table: tables.get(path[i].0, false, Interaction::Reflect).map_or(
-                    InterfaceTable {
-                        values: [1.0; TABLE_LEN],
-                    },
+                    InterfaceTable::in_cosine([1.0; TABLE_LEN]),
                     |t| InterfaceTable {
                         values: t.values.map(|v| v as f32),
+                        k: t.k as f32,
                     },
                 ),
             })

@@ -240,6 +240,44 @@ fn stop_hit(seq: &Sequence<f64>) -> Option<usize> {
     seq.steps.iter().rposition(|s| s.record_stop)
 }
 
+/// Pilot grids laid again over the active cells ([`active_region`]) while these span less
+/// than a quarter of the square across, each over the cells' box (with the cells' one-cell
+/// margin): a small pupil behind a large front element (the fisheye at f/64: a 0.16 mm
+/// pupil, a 60 mm entry square) covers a cell or two of the first pilot, and its stratified
+/// rays would then sample it with a handful of cells' resolution.
+pub fn zoomed_region(
+    seqs: &[Sequence<f64>],
+    theta: f64,
+    square: Rect,
+    pilot: usize,
+    stop_radius: f64,
+    reach: f64,
+) -> McRegion {
+    let mut region = active_region(seqs, theta, square, pilot, stop_radius, reach);
+    for _ in 0..PILOT_ZOOMS {
+        let (cw, ch) = region.cell();
+        let Some(b) = Rect::bounding(region.cells.iter().flat_map(|&(i, j)| {
+            let x = region.square.x0 + f64::from(i) * cw;
+            let y = region.square.y0 + f64::from(j) * ch;
+            [[x, y], [x + cw, y + ch]]
+        })) else {
+            break;
+        };
+        if b.width() > 0.25 * region.square.width() || b.height() > 0.25 * region.square.height() {
+            break;
+        }
+        let zoomed = active_region(seqs, theta, b, pilot, stop_radius, reach);
+        if zoomed.cells.is_empty() {
+            break;
+        }
+        region = zoomed;
+    }
+    region
+}
+
+/// How many times [`zoomed_region`] may lay its pilot again.
+const PILOT_ZOOMS: usize = 3;
+
 /// The active cells of the pilot grids of `seqs` (one per wavelength, each with its stop
 /// unclipped at the recorded crossing, which is tested against `reach` × the stop radius
 /// instead) at `theta`.
@@ -469,7 +507,7 @@ pub fn ghost_monte_carlo(
     } else {
         vec![seqs[0].clone()]
     };
-    let region = active_region(
+    let region = zoomed_region(
         &ends,
         theta,
         entry_square(system, theta),
@@ -688,7 +726,7 @@ pub fn path_flux(
     settings: &McSettings,
 ) -> McEstimate {
     let stop_radius = crate::paraxial::stop_opening(system);
-    let region = active_region(
+    let region = zoomed_region(
         std::slice::from_ref(seq),
         theta,
         entry_square(system, theta),

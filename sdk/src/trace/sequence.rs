@@ -48,26 +48,65 @@ pub struct Step<T> {
     pub record_stop: bool,
 }
 
-/// Entries per interface table (uniform in cos θ from 0 to 1).
+/// Entries per interface table (uniform in its variable from 0 to 1: [`InterfaceTable`]).
 pub const TABLE_LEN: usize = 256;
 
 /// An interface's transmittance (refraction) or reflectance (reflection) as a function of the
-/// cosine of the angle of incidence, tabulated for linear interpolation in the batch kernel.
+/// angle of incidence, tabulated for linear interpolation in the batch kernel.
+///
+/// Light arriving from the rarer medium is tabulated in the cosine of incidence `c`. Light
+/// arriving from the denser medium (`n1 > n2`) is tabulated in the cosine of refraction
+/// `w = √(1 − k (1 − c²))`, `k = (n1/n2)²`: near the critical angle the reflectance rises to 1
+/// as `√(c − c_crit)`, which no uniform table in `c` follows (256 entries in `c` were 0.9% off
+/// in reflectance a thousandth of a cosine above it), while in `w` it is smooth; `w = 0` is the
+/// critical angle, and every angle beyond it (total internal reflection) reads entry 0.
 #[derive(Clone, Debug)]
 pub struct InterfaceTable<T> {
     pub values: [T; TABLE_LEN],
+    /// `k = (n1/n2)²` when the table runs in the refracted cosine `w`; 1 when it runs in `c`.
+    pub k: T,
 }
 
 impl<T: Real> InterfaceTable<T> {
-    /// Linear interpolation at `cos` (clamped to [0, 1]; NaN reads entry 0).
+    /// A table in the cosine of incidence.
+    pub fn in_cosine(values: [T; TABLE_LEN]) -> Self {
+        InterfaceTable {
+            values,
+            k: T::one(),
+        }
+    }
+
+    /// Linear interpolation at incidence cosine `cos` (clamped to [0, 1]; NaN reads entry 0).
     #[inline(always)]
     pub fn at(&self, cos: T) -> T {
+        let var = if self.k > T::one() {
+            (T::one() - self.k * (T::one() - cos * cos))
+                .max(T::zero())
+                .sqrt()
+        } else {
+            cos
+        };
         let scale = T::of((TABLE_LEN - 1) as f64);
-        let x = (cos * scale).max(T::zero()).min(scale);
+        let x = (var * scale).max(T::zero()).min(scale);
         let i = x.to_index().min(TABLE_LEN - 2);
         let f = x - T::of(i as f64);
         let (a, b) = (self.values[i], self.values[i + 1]);
         a + f * (b - a)
+    }
+}
+
+/// The table variable's `k` for light from index `n1` into `n2` ([`InterfaceTable`]).
+pub fn table_k(n1: f64, n2: f64) -> f64 {
+    if n1 > n2 { (n1 / n2).powi(2) } else { 1.0 }
+}
+
+/// The cosine of incidence at entry `j` of a table with variable coefficient `k`.
+pub fn entry_cos(j: usize, k: f64) -> f64 {
+    let w = j as f64 / (TABLE_LEN - 1) as f64;
+    if k > 1.0 {
+        (1.0 - (1.0 - w * w) / k).sqrt()
+    } else {
+        w
     }
 }
 
@@ -121,7 +160,11 @@ impl InterfaceTableSet {
                     *r = b.reflectance(j, lambda_nm, forward);
                     *t = 1.0 - *r;
                 }
-                (InterfaceTable { values: t }, InterfaceTable { values: r })
+                let k = b.k(forward);
+                (
+                    InterfaceTable { values: t, k },
+                    InterfaceTable { values: r, k },
+                )
             };
             let (forward_t, forward_r) = tables_for(true);
             let (backward_t, backward_r) = tables_for(false);
@@ -162,6 +205,10 @@ impl InterfaceTableSet {
             // evaluated exactly throughout.
             let stack = matches!(bd.coating, Coating::Stack(_));
             for (k, forward) in [(1, true), (3, false)] {
+                // The interpolated entries run in the interpolated variable; the exact ones
+                // (and so the table) in this wavelength's.
+                to[k].k = bd.k(forward);
+                to[k - 1].k = to[k].k;
                 for j in 0..TABLE_LEN {
                     if stack || (ta[k].values[j] - tb[k].values[j]).abs() > BETWEEN_EXACT_ABOVE {
                         let r = bd.reflectance(j, lambda_nm, forward);
@@ -202,6 +249,7 @@ impl InterfaceTableSet {
                     for (v, w) in o.values.iter_mut().zip(&q.values) {
                         *v += t * (w - *v);
                     }
+                    o.k += t * (q.k - o.k);
                 }
                 Some(out)
             })
@@ -245,13 +293,24 @@ struct Boundary<'a> {
 impl Boundary<'_> {
     /// Reflectance at table entry `j` for light travelling `forward` (toward the sensor).
     fn reflectance(&self, j: usize, lambda_nm: f64, forward: bool) -> f64 {
-        let (n1, n2) = if forward {
+        let (n1, n2) = self.indices(forward);
+        let cos = entry_cos(j, table_k(n1, n2));
+        self.coating.reflectance(n1, n2, cos, lambda_nm, forward)
+    }
+
+    /// The indices before and after the boundary for light travelling `forward`.
+    fn indices(&self, forward: bool) -> (f64, f64) {
+        if forward {
             (self.n_before, self.n_after)
         } else {
             (self.n_after, self.n_before)
-        };
-        let cos = j as f64 / (TABLE_LEN - 1) as f64;
-        self.coating.reflectance(n1, n2, cos, lambda_nm, forward)
+        }
+    }
+
+    /// The table variable's `k` for light travelling `forward`.
+    fn k(&self, forward: bool) -> f64 {
+        let (n1, n2) = self.indices(forward);
+        table_k(n1, n2)
     }
 }
 
@@ -534,6 +593,7 @@ impl Sequence<f64> {
                 .iter()
                 .map(|t| InterfaceTable {
                     values: t.values.map(U::of),
+                    k: U::of(t.k),
                 })
                 .collect(),
         }
@@ -555,6 +615,33 @@ impl<T: Real> Sequence<T> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Light leaving glass (n = 1.5) for air: just above the critical angle the reflectance
+    /// climbs to 1 as the square root of the cosine's distance from it. A table in the cosine
+    /// of incidence was 0.9% off there (and the plate's ghosts at 80° 1.2% and, after four
+    /// reflections, 3.1% bright); the table in the refracted cosine follows it.
+    #[test]
+    fn an_internal_reflectance_table_follows_fresnel_up_to_the_critical_angle() {
+        let (n1, n2) = (1.5, 1.0);
+        let k = table_k(n1, n2);
+        let table = InterfaceTable {
+            values: std::array::from_fn(|j| crate::fresnel::unpolarised(n1, n2, entry_cos(j, k))),
+            k,
+        };
+        let critical = (1.0 - (n2 / n1).powi(2)).sqrt();
+        let mut worst = 0.0_f64;
+        for step in 1..2000 {
+            let cos = critical + (1.0 - critical) * f64::from(step) / 2000.0;
+            let exact = crate::fresnel::unpolarised(n1, n2, cos);
+            worst = worst.max((table.at(cos) - exact).abs());
+        }
+        assert!(worst < 2e-3, "largest error {worst:e} of the reflectance");
+        // Beyond the critical angle: total internal reflection.
+        assert_eq!(table.at(critical * 0.9), 1.0);
+        // From the rarer side the table runs in the cosine, as it always did.
+        assert_eq!(table_k(n2, n1), 1.0);
+        assert_eq!(entry_cos(128, 1.0), 128.0 / 255.0);
+    }
 
     /// The Heliar-Tronnier: surfaces 0–4 in front of the stop (5), 6–8 behind it, sensor 9.
     fn heliar() -> LensSystem {
