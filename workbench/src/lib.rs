@@ -21,6 +21,7 @@ pub mod precomputed;
 pub mod reference_file;
 pub mod report;
 pub mod sources;
+pub mod stability;
 pub mod stats;
 pub mod sweep;
 pub mod table;

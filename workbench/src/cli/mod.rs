@@ -11,6 +11,7 @@ mod info;
 mod plugins;
 mod precompute;
 pub(crate) mod render;
+mod stability;
 mod sweep;
 mod trace;
 #[cfg(feature = "window")]
@@ -65,6 +66,10 @@ pub enum Command {
     /// Error against run time over algorithms, presets and the planner's thresholds: CSV,
     /// JSON, plots with the Pareto front, contact sheets and an index.html.
     Sweep(sweep::SweepArgs),
+    /// The stiff and extreme suite: every lens across its field and at 89°, f32 against f64,
+    /// extreme f-numbers, near-flat, tiny and huge radii, near total internal reflection, thin
+    /// air gaps, caustics, four reflections; exits 1 when a figure is outside its limit.
+    Stability(stability::StabilityArgs),
 }
 
 /// Runs the command line; errors are printed with their causes.
@@ -82,6 +87,7 @@ pub fn main() -> ExitCode {
         Command::Bench(a) => bench::run(a, cli.quiet),
         Command::Sweep(a) => sweep::run(a, cli.quiet),
         Command::Crosscheck(a) => crosscheck::run(a, cli.quiet),
+        Command::Stability(a) => stability::run(a, cli.quiet),
         #[cfg(feature = "tui")]
         Command::Edit(a) => edit::run(a, cli.quiet),
         #[cfg(feature = "window")]
