@@ -12,11 +12,13 @@
 //! error falls as 1/√rays, with no grid to fold over itself: caustics and ghosts whose ray grid
 //! folds cost the same as any other.
 //!
+//! - [`colour`]: each ghost's colour per band, integrated over the band in 5 nm steps.
 //! - [`kernel`]: the splat kernel (box, or a tent of stated half-width).
 //! - [`render`]: tracing every ghost's rays and splatting them, deterministically.
 //! - [`error`]: what can go wrong.
 //! - [`plugin`]: the plugin (ABI v1), its parameters `rays`, `kernel_px`, `bands`, `seed`.
 
+pub mod colour;
 pub mod error;
 pub mod kernel;
 pub mod plugin;

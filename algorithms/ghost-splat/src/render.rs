@@ -6,9 +6,9 @@
 //! ghost's active cells, each split into `q × q` strata with one jittered ray each (`q` the
 //! largest that keeps `rays` rays per ghost over its bands, at least 1). A ray's flux (stratum
 //! area × cos θ × the light's intensity × exact Fresnel/coating throughput × aperture
-//! transmission at the stop) times its band's colour (the light's spectral sampling weight) is
-//! its energy, in the ray-traced renderer's image units. Above [`MAX_JOB_RAYS`] rays per band
-//! the rays are split into independent batches of that size, each at `1/batches` weight.
+//! transmission at the stop) times its band's colour ([`crate::colour`]) is its energy, in
+//! the ray-traced renderer's image units. Above [`MAX_JOB_RAYS`] rays per band the rays are
+//! split into independent batches of that size, each at `1/batches` weight.
 //!
 //! **Order.** Jobs (ghost, band, batch) are traced in parallel a wave at a time, each into its
 //! own list of landed rays (reserved to its stratum count: no allocation per ray); the lists
@@ -18,11 +18,11 @@
 
 use flarebench_sdk::LensSystem;
 use flarebench_sdk::abi::author::Scene;
-use flarebench_sdk::color::SpectralSampling;
 use flarebench_sdk::ghost::GhostPath;
 use flarebench_sdk::ghost::monte_carlo::{GhostRays, McSettings};
 use rayon::prelude::*;
 
+use crate::colour::BandSampling;
 use crate::error::SplatError;
 use crate::kernel::Kernel;
 
@@ -124,7 +124,7 @@ pub fn render_into(
     scratch.total.resize(n, [0.0; 3]);
     let wave = (2 * rayon::current_num_threads()).max(8);
     for (li, light) in scene.lights.iter().enumerate() {
-        let sampling = SpectralSampling::new(settings.bands, light.spectrum)?;
+        let sampling = BandSampling::new(settings.bands, light.spectrum)?;
         let batches = settings.rays.div_ceil(settings.bands * MAX_JOB_RAYS).max(1);
         let mc = McSettings {
             rays: settings.rays,
@@ -137,24 +137,26 @@ pub fn render_into(
             light.phi_deg.to_radians(),
             light.intensity,
         );
-        let ghosts: Vec<GhostRays<'_>> = paths
+        // Each ghost's rays and band colours; each batch alone estimates the whole image:
+        // each at 1/batches.
+        let lambdas = sampling.coarse.wavelengths_nm();
+        let ghosts: Vec<(GhostRays<'_>, Vec<[f64; 3]>)> = paths
             .iter()
             .filter_map(|&p| {
-                let lambdas = sampling.wavelengths_nm();
-                GhostRays::new(system, &scene.aperture, &frame, p, beam, lambdas, &mc)
+                let rays = GhostRays::new(system, &scene.aperture, &frame, p, beam, lambdas, &mc)?;
+                (rays.rays() > 0).then(|| {
+                    let mut c = sampling.colours(system, p);
+                    for v in c.iter_mut().flatten() {
+                        *v /= batches as f64;
+                    }
+                    (rays, c)
+                })
             })
-            .filter(|g| g.rays() > 0)
-            .collect();
-        // Each batch alone estimates the whole image: each at 1/batches.
-        let colours: Vec<[f64; 3]> = sampling
-            .weights()
-            .iter()
-            .map(|w| w.map(|c| f64::from(c) / batches as f64))
             .collect();
         let jobs: Vec<(usize, usize, usize)> = ghosts
             .iter()
             .enumerate()
-            .flat_map(|(g, r)| {
+            .flat_map(|(g, (r, _))| {
                 (0..r.bands()).flat_map(move |b| (0..r.batches()).map(move |k| (g, b, k)))
             })
             .collect();
@@ -167,7 +169,7 @@ pub fn render_into(
             lists.par_iter_mut().zip(wave_jobs).for_each_init(
                 || Vec::with_capacity(64),
                 |hits, (list, &(g, b, k))| {
-                    let rays = &ghosts[g];
+                    let (rays, colours) = &ghosts[g];
                     list.clear();
                     list.reserve(rays.rays() / (rays.bands() * rays.batches()));
                     let c = colours[b];
@@ -185,7 +187,7 @@ pub fn render_into(
             splat_lists(&mut scratch.total, frame.width, settings.kernel, lists);
         }
         stats.ghosts_drawn += drawn.iter().filter(|&&d| d).count() as u32;
-        stats.rays += ghosts.iter().map(GhostRays::rays).sum::<usize>();
+        stats.rays += ghosts.iter().map(|(r, _)| r.rays()).sum::<usize>();
     }
     for (o, t) in out.iter_mut().zip(&scratch.total) {
         for c in 0..3 {
