@@ -31,10 +31,10 @@ fn raytraced(sys: &LensSystem, scene: &Scene, bands: usize) -> HdrImage {
 /// for a normal estimate).
 const SIGMAS: f64 = 4.0;
 
-/// What the two may differ by beyond that, relative: the renderer's own energy error (its
-/// high preset against the dense reference, under 0.1% in docs/accuracy.md) and the colour
-/// within each band (both integrate it in 5 nm steps with the throughput at normal incidence,
-/// the renderer over its 31 bands, the splat over its 7). Measured (2026-12-04, 160 × 90,
+/// What the two may differ by beyond that, relative: the renderer's own error (its high
+/// preset's image is 0.85% RMSE from the dense reference on the Heliar, docs/accuracy.md) and
+/// the colour within each band (both integrate it in 5 nm steps with the throughput at normal
+/// incidence, the renderer over its 31 bands, the splat over its 7). Measured (2026-12-04, 160 × 90,
 /// 8 seeds of 16384 rays a ghost): −0.29% ± 0.13% (one standard error). Taking the light's
 /// weight at each of 7 bands' centres instead put the energy 14% low: caught.
 const BAND_AND_RENDERER_TOLERANCE: f64 = 3e-3;
@@ -80,7 +80,7 @@ fn the_splat_carries_the_ray_traced_renderer_s_energy_on_the_heliar_at_10_degree
 }
 
 /// The relative RMSE at 4× the rays over that at 1×: 2 for an error falling as 1/√rays; the
-/// renderer's own error (well under 1% against the 10–50% compared here) barely lowers it.
+/// renderer's own error (under 1% against the 50–130% compared here) barely lowers it.
 /// Measured (2026-12-04, 160 × 90, box kernel, 7 bands): 1.26 at 32768 rays, 0.53 at 131072,
 /// a fall of 2.4 (the strata make it a little faster than 1/√rays). Below this bound the
 /// error would not be falling as 1/√rays.
