@@ -28,6 +28,11 @@
 //! image in the band's colour — the same image units as the renderer (an image's sum is
 //! `Σ_band rgb · Φ_band`).
 //!
+//! **The rays themselves.** [`GhostRays`] (`rays.rs`) prepares one ghost's sequences, active
+//! region, strata and random streams and traces any (band, batch), handing each ray that
+//! carries light to a closure with its flux and landing pixel: [`ghost_monte_carlo`] sums them,
+//! and a splatting renderer (`algorithms/ghost-splat`) draws them.
+//!
 //! **Error bar.** The `batches` batches are independent estimates (each has one ray per
 //! stratum, from its own random stream); the standard error of their mean is `s / √B`, `s` the
 //! batches' sample standard deviation. The random streams are seeded from the settings' seed,
@@ -366,36 +371,6 @@ pub fn active_region(
     }
 }
 
-/// A small, fast generator (SplitMix64, Steele, Lea & Flood 2014): good enough for jitter,
-/// and seeded per stream so that results do not depend on scheduling.
-#[derive(Clone, Copy, Debug)]
-struct SplitMix64(u64);
-
-impl SplitMix64 {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in [0, 1).
-    fn next_f64(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-
-    /// The stream for these keys.
-    fn stream(keys: &[u64]) -> SplitMix64 {
-        let mut g = SplitMix64(0);
-        for &k in keys {
-            g.0 ^= k;
-            g.0 = g.next_u64();
-        }
-        g
-    }
-}
-
 /// What one batch of one band adds up (image units, pixels).
 #[derive(Clone, Copy, Debug, Default)]
 struct Sums {
@@ -406,63 +381,6 @@ struct Sums {
     xx: f64,
     xy: f64,
     yy: f64,
-}
-
-/// A ray that carries light: its entrance point, landing (sensor mm, meridional frame), stop
-/// crossing over the stop radius (meridional frame) and throughput.
-#[derive(Clone, Copy, Debug)]
-struct Landed {
-    entrance: [f64; 2],
-    sensor: [f64; 2],
-    stop_uv: [f64; 2],
-    throughput: f64,
-}
-
-/// Traces the strata of `region` for one batch of `seq`, calling `f` for every ray that
-/// completes the path inside every clear semi-diameter; `hits` is the caller's buffer.
-#[allow(
-    clippy::too_many_arguments,
-    reason = "one batch's whole description, private"
-)]
-fn sample_batch(
-    seq: &Sequence<f64>,
-    stop: Option<usize>,
-    stop_radius: f64,
-    theta: f64,
-    region: &McRegion,
-    q: usize,
-    rng: &mut SplitMix64,
-    hits: &mut Vec<Hit>,
-    mut f: impl FnMut(Landed),
-) {
-    let (s, c) = theta.sin_cos();
-    let dir = DVec3::new(0.0, s, c);
-    let (cw, ch) = region.cell();
-    let (sw, sh) = (cw / q as f64, ch / q as f64);
-    for &(i, j) in &region.cells {
-        let x0 = region.square.x0 + i as f64 * cw;
-        let y0 = region.square.y0 + j as f64 * ch;
-        for sj in 0..q {
-            for si in 0..q {
-                let x = x0 + (si as f64 + rng.next_f64()) * sw;
-                let y = y0 + (sj as f64 + rng.next_f64()) * sh;
-                hits.clear();
-                let r = seq.trace_with_hits(&Ray::new(DVec3::new(x, y, 0.0), dir), hits);
-                if !r.completed || r.max_relative_radius > 1.0 {
-                    continue;
-                }
-                let stop_uv = stop.and_then(|h| hits.get(h)).map_or([0.0, 0.0], |h| {
-                    [h.position.x / stop_radius, h.position.y / stop_radius]
-                });
-                f(Landed {
-                    entrance: [x, y],
-                    sensor: [r.ray.origin.x, r.ray.origin.y],
-                    stop_uv,
-                    throughput: r.throughput,
-                });
-            }
-        }
-    }
 }
 
 /// Strata per cell a side for `rays` over `cells` cells, `bands` bands and `batches` batches.
@@ -488,52 +406,21 @@ pub fn ghost_monte_carlo(
     settings: &McSettings,
     images: Option<&mut McImages>,
 ) -> Option<McGhost> {
-    let (theta, phi, irradiance) = light;
-    let stop_radius = crate::paraxial::stop_opening(system);
-    let seqs: Vec<Sequence<f64>> = bands
-        .iter()
-        .map(|b| {
-            Sequence::ghost_path(system, b.lambda_nm, &path)
-                .ok()
-                .map(Sequence::aperture_by_mask)
-        })
-        .collect::<Option<_>>()?;
-    if seqs.is_empty() {
-        return None;
-    }
-    // The pilot at the band ends (the ghost's entry region moves with the wavelength).
-    let ends: Vec<Sequence<f64>> = if seqs.len() > 1 {
-        vec![seqs[0].clone(), seqs[seqs.len() - 1].clone()]
-    } else {
-        vec![seqs[0].clone()]
-    };
-    let region = zoomed_region(
-        &ends,
-        theta,
-        entry_square(system, theta),
-        settings.pilot,
-        stop_radius,
-        aperture_reach(aperture),
-    );
     let batches = settings.batches.max(2);
-    let q = strata(settings.rays, region.cells.len(), bands.len(), batches);
-    let (cw, ch) = region.cell();
-    let stratum_flux = cw * ch / (q * q) as f64 * theta.cos() * irradiance;
-    let (sphi, cphi) = phi.sin_cos();
-    let sampler = aperture.sampler();
+    let lambdas: Vec<f64> = bands.iter().map(|b| b.lambda_nm).collect();
+    let rays = GhostRays::new(
+        system,
+        aperture,
+        frame,
+        path,
+        light,
+        &lambdas,
+        &McSettings {
+            batches,
+            ..*settings
+        },
+    )?;
     let (w, h) = (frame.width as f64, frame.height as f64);
-    let to_px = |p: [f64; 2]| {
-        // Meridional frame → the lens's (turned by φ) → pixels (photograph orientation).
-        let (x, y) = (p[0] * cphi - p[1] * sphi, p[0] * sphi + p[1] * cphi);
-        [
-            (0.5 - x / frame.film_width_mm) * w,
-            (0.5 + y / frame.film_height_mm) * h,
-        ]
-    };
-    let key = path
-        .reflections()
-        .iter()
-        .fold(0u64, |k, &s| k.wrapping_mul(131).wrapping_add(s as u64 + 1));
     let want_images = images.is_some();
     let jobs: Vec<(usize, usize)> = (0..bands.len())
         .flat_map(|b| (0..batches).map(move |k| (b, k)))
@@ -555,54 +442,36 @@ pub fn ghost_monte_carlo(
             let band = &bands[b];
             let rgb = band.rgb.map(f64::from);
             let lum = LUMINANCE[0] * rgb[0] + LUMINANCE[1] * rgb[1] + LUMINANCE[2] * rgb[2];
-            let mut rng = SplitMix64::stream(&[settings.seed, key, b as u64, k as u64]);
             let mut s = Sums::default();
             let (list, images, span, hits) = &mut acc;
-            let stop = stop_hit(&seqs[b]);
-            sample_batch(
-                &seqs[b],
-                stop,
-                stop_radius,
-                theta,
-                &region,
-                q,
-                &mut rng,
-                hits,
-                |l| {
-                    let [u, v] = l.stop_uv;
-                    let uv = [u * cphi - v * sphi, u * sphi + v * cphi];
-                    let tau = f64::from(sampler.transmission(uv[0] as f32, uv[1] as f32));
-                    let flux = stratum_flux * l.throughput * tau;
-                    if flux <= 0.0 {
-                        return;
-                    }
-                    let e = [l.entrance[0], l.entrance[1]];
-                    let p = Rect {
-                        x0: e[0],
-                        y0: e[1],
-                        x1: e[0],
-                        y1: e[1],
-                    };
-                    *span = Some(span.map_or(p, |r| r.union(&p)));
-                    let f = flux * lum;
-                    s.flux += f;
-                    let [px, py] = to_px(l.sensor);
-                    if px >= 0.0 && px < w && py >= 0.0 && py < h {
-                        s.flux_in += f;
-                        s.x += f * px;
-                        s.y += f * py;
-                        s.xx += f * px * px;
-                        s.xy += f * px * py;
-                        s.yy += f * py * py;
-                    }
-                    if let Some(im) = images.as_mut() {
-                        let scale = 1.0 / batches as f64;
-                        let e = rgb.map(|c| c * flux * scale);
-                        splat(&mut im.image, px, py, e);
-                        splat(&mut im.halves[k % 2], px, py, e.map(|c| 2.0 * c));
-                    }
-                },
-            );
+            rays.trace(b, k, hits, |ray| {
+                let e = ray.entrance;
+                let p = Rect {
+                    x0: e[0],
+                    y0: e[1],
+                    x1: e[0],
+                    y1: e[1],
+                };
+                *span = Some(span.map_or(p, |r| r.union(&p)));
+                let flux = ray.flux;
+                let f = flux * lum;
+                s.flux += f;
+                let [px, py] = ray.px;
+                if px >= 0.0 && px < w && py >= 0.0 && py < h {
+                    s.flux_in += f;
+                    s.x += f * px;
+                    s.y += f * py;
+                    s.xx += f * px * px;
+                    s.xy += f * px * py;
+                    s.yy += f * py * py;
+                }
+                if let Some(im) = images.as_mut() {
+                    let scale = 1.0 / batches as f64;
+                    let e = rgb.map(|c| c * flux * scale);
+                    splat(&mut im.image, px, py, e);
+                    splat(&mut im.halves[k % 2], px, py, e.map(|c| 2.0 * c));
+                }
+            });
             list.push((b * batches + k, s));
             acc
         })
@@ -678,9 +547,9 @@ pub fn ghost_monte_carlo(
     let flux_in = est(|s| s.flux_in);
     Some(McGhost {
         path,
-        rays: region.cells.len() * q * q * bands.len() * batches,
-        cells: region.cells.len(),
-        strata: q,
+        rays: rays.rays(),
+        cells: rays.region().cells.len(),
+        strata: rays.strata(),
         flux,
         flux_in_frame: flux_in,
         centroid_px: centroid,
@@ -766,5 +635,9 @@ pub fn path_flux(
     McEstimate::of(&values)
 }
 
+mod rays;
 #[cfg(test)]
 mod tests;
+
+pub use rays::{GhostRays, McRay};
+use rays::{SplitMix64, sample_batch};
