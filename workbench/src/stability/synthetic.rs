@@ -21,6 +21,7 @@
 use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::frame::Frame;
 use flarebench_sdk::fresnel;
+use flarebench_sdk::ghost::ReflectionOrder;
 use flarebench_sdk::ghost::bounds;
 use flarebench_sdk::ghost::context::{Band, GhostContext, GhostGrid, GhostLight};
 use flarebench_sdk::ghost::monte_carlo::McSettings;
@@ -31,6 +32,7 @@ use flarebench_sdk::paraxial::{analyse, stop_opening};
 use flarebench_sdk::trace::InterfaceTableSet;
 use flarebench_sdk::{LensSystem, Medium, Surface};
 use ghost_raytrace::crosscheck::{CrosscheckOptions, crosscheck};
+use ghost_raytrace::plan::PlanOptions;
 use ghost_raytrace::scene::{LightSpec, Quality};
 
 use super::{
@@ -404,6 +406,29 @@ fn check_scale(heliar: &LensSystem, options: SuiteOptions) -> Vec<Finding> {
     out
 }
 
+/// The Heliar's ghosts with its four-reflection paths (every one the energy bound keeps, none
+/// culled) at 10°, in f32 and f64.
+fn check_four_reflections(heliar: &LensSystem, options: SuiteOptions) -> Vec<Finding> {
+    // Every ghost with light, however dim (the presets cull the four-reflection ones).
+    let plan = PlanOptions {
+        reflections: ReflectionOrder::Four,
+        cull: false,
+        ..default_plan()
+    };
+    let case = "four reflections, θ 10°".to_string();
+    match render_pair(
+        heliar,
+        &Aperture::Circular,
+        frame_of(heliar, options.width),
+        10.0,
+        30.0,
+        &plan,
+    ) {
+        Ok(pair) => precision_findings(&heliar.name, &case, &pair),
+        Err(e) => vec![Finding::failed("non-finite", &heliar.name, case, e)],
+    }
+}
+
 /// Every ghost of `system` lit at `theta_deg` the renderer draws, its energy against the
 /// Monte-Carlo estimate: the worst relative difference among the ghosts holding at least
 /// [`MC_MIN_SHARE`] of the drawn energy (each against its own limit, the larger of
@@ -513,6 +538,7 @@ pub fn check_all(options: SuiteOptions) -> Vec<Finding> {
     match crate::lens_library::load("heliar-tronnier", true) {
         Ok(heliar) => {
             out.extend(check_scale(&heliar.system, options));
+            out.extend(check_four_reflections(&heliar.system, options));
             out.extend(check_against_mc(
                 "ghost-energy-mc",
                 &heliar.system,
