@@ -60,11 +60,42 @@ fn path_throughput(path: GhostPath, f: &[[f64; 4]], sensor: usize) -> f64 {
     t * forward_out
 }
 
+/// Wavelengths (nm) at which the plan measures a ghost's flux for its spectral shape
+/// ([`SpectralShape`]): every 50 nm over the sampled range.
+pub const SHAPE_NODES_NM: [f64; 9] = [
+    380.0, 430.0, 480.0, 530.0, 580.0, 630.0, 680.0, 730.0, 780.0,
+];
+
+/// How a ghost's flux departs from its throughput at normal incidence across the spectrum:
+/// `G(λ) = F(λ) / T₀(λ)`, the ghost's traced flux over its normal-incidence throughput, at
+/// [`SHAPE_NODES_NM`] and linear between them. The colours assume `G` constant over each
+/// traced band's bin; where it is not (the stop clipping a ghost whose focus moves with the
+/// wavelength, coatings at oblique incidence), a ghost needs more bands than its dispersion
+/// asks for: [`GhostColours::bins_error`] says how many.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpectralShape {
+    g: [f64; SHAPE_NODES_NM.len()],
+}
+
+impl SpectralShape {
+    /// `G` at `lambda_nm` (linear between the nodes, constant beyond them).
+    pub fn at(&self, lambda_nm: f64) -> f64 {
+        let step = SHAPE_NODES_NM[1] - SHAPE_NODES_NM[0];
+        let last = SHAPE_NODES_NM.len() - 1;
+        let t = ((lambda_nm - SHAPE_NODES_NM[0]) / step).clamp(0.0, last as f64);
+        let i = (t.floor() as usize).min(last - 1);
+        let f = t - i as f64;
+        self.g[i] * (1.0 - f) + self.g[i + 1] * f
+    }
+}
+
 /// Per-wavelength data for colouring every ghost of a lens under one light.
 #[derive(Debug)]
 pub struct GhostColours {
     /// Fine wavelengths, their colour weights (for the light) and the surface factors there.
     fine: Vec<(f64, [f32; 3], Vec<[f64; 4]>)>,
+    /// The surface factors at [`SHAPE_NODES_NM`].
+    nodes: Vec<Vec<[f64; 4]>>,
     sensor: usize,
     /// The light's intensity, scaling every colour.
     intensity: f32,
@@ -84,6 +115,10 @@ impl GhostColours {
                 .iter()
                 .zip(fine.weights())
                 .map(|(&l, &w)| (l, w, surface_factors(system, l)))
+                .collect(),
+            nodes: SHAPE_NODES_NM
+                .iter()
+                .map(|&l| surface_factors(system, l))
                 .collect(),
             sensor: system.sensor_index(),
             intensity,
@@ -118,6 +153,84 @@ impl GhostColours {
             }
         }
         c
+    }
+}
+
+impl GhostColours {
+    /// `path`'s spectral shape from its flux measured at each of [`SHAPE_NODES_NM`] (in any
+    /// unit: only its variation counts); `None` when the ghost is dark at some node.
+    pub fn shape(
+        &self,
+        path: GhostPath,
+        flux: [f64; SHAPE_NODES_NM.len()],
+    ) -> Option<SpectralShape> {
+        let mut g = [0.0; SHAPE_NODES_NM.len()];
+        for (k, (f, factors)) in flux.iter().zip(&self.nodes).enumerate() {
+            let t = path_throughput(path, factors, self.sensor);
+            if !(t > 0.0 && f.is_finite() && *f > 0.0) {
+                return None;
+            }
+            g[k] = f / t;
+        }
+        Some(SpectralShape { g })
+    }
+
+    /// The relative colour error of tracing `path` at `m` equal bins when its flux varies
+    /// over the spectrum as `shape` says: each bin's colour assumes `G` constant over the bin
+    /// at its value at the centre, where the band is traced, while the light carries
+    /// `∫ w(λ) T₀(λ) G(λ) dλ`. The largest channel's error over the largest channel.
+    pub fn bins_error(&self, path: GhostPath, m: usize, shape: &SpectralShape) -> f64 {
+        let cell = bin_width_nm(FINE_BANDS);
+        let mut exact = [0.0_f64; 3];
+        let mut model = [0.0_f64; 3];
+        for (k, (nm, w, f)) in self.fine.iter().enumerate() {
+            let t = path_throughput(path, f, self.sensor);
+            if t.is_nan() || t <= 0.0 {
+                continue;
+            }
+            let g = shape.at(*nm);
+            // The cell's share of each bin it overlaps, at that bin's centre's G.
+            let (lo, hi) = (bin_edge_nm(FINE_BANDS, k), bin_edge_nm(FINE_BANDS, k + 1));
+            let width = bin_width_nm(m);
+            let first = (((lo - SAMPLING_MIN_NM) / width).floor().max(0.0) as usize).min(m - 1);
+            let mut g_model = 0.0;
+            for i in first..m {
+                let (blo, bhi) = (bin_edge_nm(m, i), bin_edge_nm(m, i + 1));
+                if blo >= hi {
+                    break;
+                }
+                let share = ((hi.min(bhi) - lo.max(blo)) / cell).clamp(0.0, 1.0);
+                g_model += share * shape.at(0.5 * (blo + bhi));
+            }
+            for c in 0..3 {
+                let wt = f64::from(w[c]) * t;
+                exact[c] += wt * g;
+                model[c] += wt * g_model;
+            }
+        }
+        let scale = exact.iter().cloned().fold(0.0, f64::max);
+        if scale <= 0.0 {
+            return 0.0;
+        }
+        (0..3)
+            .map(|c| (model[c] - exact[c]).abs())
+            .fold(0.0, f64::max)
+            / scale
+    }
+
+    /// The fewest equal bins, from `min` to `max`, whose [`GhostColours::bins_error`] is
+    /// within `tolerance` (`max` when none is).
+    pub fn bins_for(
+        &self,
+        path: GhostPath,
+        shape: &SpectralShape,
+        min: usize,
+        max: usize,
+        tolerance: f64,
+    ) -> usize {
+        (min.max(1)..=max)
+            .find(|&m| self.bins_error(path, m, shape) <= tolerance)
+            .unwrap_or(max)
     }
 }
 
@@ -220,6 +333,65 @@ mod tests {
             let ours = y(colour(31, i));
             assert!((ours - t).abs() < 0.02 * peak, "bin {i}: {ours} vs {t}");
         }
+    }
+
+    /// A flux that follows the normal-incidence throughput (a flat shape) needs one band; a
+    /// shape that varies over the spectrum makes few bands wrong by what a direct sum says,
+    /// and the error falls to nothing as the bins shrink to the fine cells.
+    #[test]
+    fn the_spectral_shape_sets_the_bands_a_colour_needs() {
+        let sys = plate();
+        let path = GhostPath::two(2, 1);
+        let c = GhostColours::new(&sys, LightSpectrum::D65, 1.0).unwrap();
+        let t = |k: usize| path_throughput(path, &c.nodes[k], c.sensor);
+        let flat = c.shape(path, std::array::from_fn(|k| 3.0 * t(k))).unwrap();
+        for m in [1, 2, 5, 31] {
+            assert!(c.bins_error(path, m, &flat) < 1e-12, "flat, {m} bins");
+        }
+        assert_eq!(c.bins_for(path, &flat, 1, 31, 1e-3), 1);
+        // G rising linearly from 1 at 380 nm to 4 at 780 nm.
+        let ramp = c
+            .shape(
+                path,
+                std::array::from_fn(|k| t(k) * (1.0 + 3.0 * k as f64 / 8.0)),
+            )
+            .unwrap();
+        assert!((ramp.at(580.0) - 2.5).abs() < 1e-12 && (ramp.at(405.0) - 1.1875).abs() < 1e-12);
+        // One band: G(580) = 2.5 for every wavelength, against the weights' own mean of G.
+        let y = |v: [f64; 3]| v.iter().cloned().fold(0.0, f64::max);
+        let (mut exact, mut one) = ([0.0; 3], [0.0; 3]);
+        for (nm, w, _) in &c.fine {
+            for ch in 0..3 {
+                exact[ch] += f64::from(w[ch]) * ramp.at(*nm);
+                one[ch] += f64::from(w[ch]) * 2.5;
+            }
+        }
+        let direct = (0..3)
+            .map(|ch| (one[ch] - exact[ch]).abs())
+            .fold(0.0, f64::max)
+            / y(exact);
+        assert!(
+            direct > 0.01,
+            "a ramp this steep is coloured wrongly by one band"
+        );
+        assert!((c.bins_error(path, 1, &ramp) - direct).abs() < 1e-9);
+        let errors: Vec<f64> = [1, 2, 4, 8, 16, 80]
+            .iter()
+            .map(|&m| c.bins_error(path, m, &ramp))
+            .collect();
+        assert!(errors.windows(2).all(|e| e[1] < e[0]), "{errors:?}");
+        assert!(errors[5] < 1e-12, "{errors:?}");
+        let m = c.bins_for(path, &ramp, 1, 31, 1e-3);
+        assert!(m > 1 && c.bins_error(path, m, &ramp) <= 1e-3);
+        assert!(c.bins_error(path, m - 1, &ramp) > 1e-3);
+        // A ghost dark at one node has no shape.
+        assert!(
+            c.shape(
+                path,
+                std::array::from_fn(|k| if k == 4 { 0.0 } else { 1.0 })
+            )
+            .is_none()
+        );
     }
 
     /// Without coatings or dispersion a ghost's throughput is the same at every wavelength, so

@@ -21,11 +21,14 @@ use flarebench_sdk::color::SpectralSampling;
 use flarebench_sdk::frame::Frame;
 use flarebench_sdk::ghost::bounds::{self, GhostBounds, MAX_GRID, MIN_GRID};
 use flarebench_sdk::ghost::context::Band;
+use flarebench_sdk::ghost::grid::trace_grid;
 use flarebench_sdk::ghost::table::BoundsTable;
 use flarebench_sdk::ghost::{
     FourReflectionBounds, GhostPath, GridTrace, Rect, ReflectionOrder, enumerate_ghosts_of_order,
 };
+use flarebench_sdk::paraxial::stop_opening;
 use flarebench_sdk::trace::InterfaceTableSet;
+use std::borrow::Cow;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
 
@@ -33,7 +36,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::GhostRenderError;
-use crate::colour::{Bin, GhostColours};
+use crate::colour::{Bin, GhostColours, SHAPE_NODES_NM, SpectralShape};
 use crate::scene::{LightSpec, Quality};
 
 /// Wavelength at which bounds and energies are found (nm).
@@ -228,6 +231,13 @@ pub struct PlanOptions<'a> {
     /// Coarse pixels a ghost's radius must span when it is drawn into a coarse frame
     /// ([`coarse_factor`]; the preset's [`Quality::coarse_pixels_per_radius`]).
     pub coarse_pixels_per_radius: f64,
+    /// A ghost whose dispersion asks for fewer bands than `bands`, and that carries at least
+    /// [`SHAPE_MIN_SHARE`] of the drawn ghosts' light on the frame, has its flux measured at
+    /// [`SHAPE_NODES_NM`] ([`SHAPE_GRID`]² rays over its entrance rectangle each) and takes
+    /// at least the fewest bands whose colour error from the flux's spectral variation is
+    /// within this ([`GhostColours::bins_for`]; the preset's [`Quality::spectral_tolerance`];
+    /// infinite: bands by dispersion alone).
+    pub spectral_tolerance: f64,
     /// Two-reflection ghosts only (the default), or four-reflection ghosts too. A precomputed
     /// table without some four-reflection ghost that survives the energy bound is not an
     /// error: that ghost's bounds are traced for the light, as without a table.
@@ -264,6 +274,7 @@ impl<'a> PlanOptions<'a> {
             exact_tables: false,
             max_downscale: quality.max_downscale(),
             coarse_pixels_per_radius: quality.coarse_pixels_per_radius(),
+            spectral_tolerance: quality.spectral_tolerance(),
             reflections: ReflectionOrder::Two,
             lens_tables: None,
             warm_start: None,
@@ -296,6 +307,9 @@ struct Planner<'p, 'o> {
     /// The tables the plan traces bounds with, built only when something is traced (a frame
     /// whose every ghost is looked up in a table needs none).
     bounds_tables: OnceLock<InterfaceTableSet>,
+    /// The tables at [`SHAPE_NODES_NM`] (the lens's held ones when given), built when a
+    /// ghost's spectral shape is first measured.
+    shape_tables: OnceLock<Vec<Cow<'o, InterfaceTableSet>>>,
     /// The flux energy shares are measured against (the on-axis direct image's): for traced
     /// energies, and for the four-reflection bound; the same for every light.
     reference: Option<f64>,
@@ -341,6 +355,7 @@ impl<'p, 'o> Planner<'p, 'o> {
             opts,
             paths,
             bounds_tables: OnceLock::new(),
+            shape_tables: OnceLock::new(),
             reference: None,
         };
         let four = opts.reflections == ReflectionOrder::Four;
@@ -352,6 +367,40 @@ impl<'p, 'o> Planner<'p, 'o> {
             .then(|| bounds::reference_flux(system, planner.tables(), &mut GridTrace::default()));
         planner.reference = reference;
         planner
+    }
+
+    fn shape_tables(&self) -> &[Cow<'o, InterfaceTableSet>] {
+        self.shape_tables.get_or_init(|| {
+            let held = self.opts.lens_tables.filter(|l| l.is_for(self.system));
+            SHAPE_NODES_NM
+                .par_iter()
+                .map(|&nm| {
+                    held.and_then(|l| l.node(nm)).map_or_else(
+                        || Cow::Owned(InterfaceTableSet::for_system(self.system, nm)),
+                        Cow::Borrowed,
+                    )
+                })
+                .collect()
+        })
+    }
+
+    /// `path`'s flux over its entrance rectangle at each of [`SHAPE_NODES_NM`] (its spectral
+    /// shape), or `None` where it is dark at one of them.
+    fn spectral_shape(
+        &self,
+        path: GhostPath,
+        b: &GhostBounds,
+        job: &LightJob,
+    ) -> Option<SpectralShape> {
+        let stop = stop_opening(self.system);
+        let mut grid = GridTrace::default();
+        let mut flux = [0.0; SHAPE_NODES_NM.len()];
+        for (f, tables) in flux.iter_mut().zip(self.shape_tables()) {
+            let seq = bounds::ghost_sequence(self.system, path, tables)?;
+            trace_grid(&seq, job.theta, b.entrance, SHAPE_GRID, stop, &mut grid);
+            *f = bounds::clipped_flux(&grid, job.theta);
+        }
+        job.colours.shape(path, flux)
     }
 
     fn tables(&self) -> &InterfaceTableSet {
@@ -393,6 +442,7 @@ impl<'p, 'o> Planner<'p, 'o> {
         let (mut kept_visible, mut culled_visible) = (0.0, 0.0);
         let mut bins = Bins::default();
         let mut ghosts = Vec::new();
+        let mut kept = Vec::new();
         let mut dropped = Vec::new();
         for (path, b) in found {
             let Some(b) = b else {
@@ -419,7 +469,20 @@ impl<'p, 'o> Planner<'p, 'o> {
                 continue;
             }
             kept_visible += share;
-            ghosts.push(self.ghost_job(path, b, &job, &mut bins));
+            kept.push((path, b, share));
+        }
+        // Each kept ghost's bands by dispersion, raised where its spectral shape asks for
+        // more: measured (in parallel, 1.5 k rays a ghost) for the ghosts that carry at least
+        // SHAPE_MIN_SHARE of the kept ghosts' light on the frame.
+        let bands: Vec<usize> = kept
+            .par_iter()
+            .map(|(path, b, share)| {
+                let measure = *share >= SHAPE_MIN_SHARE * kept_visible;
+                self.bands_for(*path, b, &job, measure)
+            })
+            .collect();
+        for ((path, b, _), m) in kept.into_iter().zip(bands) {
+            ghosts.push(self.ghost_job(path, b, m, &job, &mut bins));
         }
         // A four-reflection ghost's bound is all its energy might be, on the frame or not.
         culled_visible += bounded_out.iter().map(|d| d.energy_share).sum::<f64>();
@@ -537,15 +600,9 @@ impl<'p, 'o> Planner<'p, 'o> {
         Ok((found, not_in_table))
     }
 
-    /// A kept ghost's job: its grid, coarse factor, bands and their colours.
-    fn ghost_job(
-        &self,
-        path: GhostPath,
-        b: GhostBounds,
-        job: &LightJob,
-        bins: &mut Bins,
-    ) -> GhostJob {
-        let (system, opts, frame) = (self.system, self.opts, self.frame);
+    /// A kept ghost's grid and coarse factor.
+    fn grid_and_downscale(&self, b: &GhostBounds) -> (usize, usize) {
+        let opts = self.opts;
         let cap = (MAX_GRID as f64 * opts.grid_scale.max(1.0)).ceil() as usize;
         let scale = if b.grid <= SMOOTH_GRID {
             opts.grid_scale * opts.smooth_grid_scale
@@ -556,22 +613,50 @@ impl<'p, 'o> Planner<'p, 'o> {
         let downscale = coarse_factor(
             &b.sensor,
             grid,
-            frame,
+            self.frame,
             opts.max_downscale,
             opts.coarse_pixels_per_radius,
         );
-        // Enough bands that neighbouring ones move the ghost by at most the spacing:
-        // m bands over a dispersion of D drawn pixels step D/(m − 1).
-        let groups = {
-            let d =
-                dispersion_px(system, path, job.theta, job.lo, job.hi, frame) / downscale as f64;
-            let m = if d.is_finite() {
-                ((d / opts.band_spacing_px).ceil() as usize).saturating_add(1)
-            } else {
-                opts.bands
-            };
-            m.min(opts.bands).max(opts.min_bands.min(opts.bands)).max(1)
+        (grid, downscale)
+    }
+
+    /// How many bands a kept ghost is traced at: enough that neighbouring ones move it by at
+    /// most the band spacing (m bands over a dispersion of D drawn pixels step D/(m − 1)),
+    /// and, with `measure`, enough that its colour stays within the spectral tolerance.
+    fn bands_for(&self, path: GhostPath, b: &GhostBounds, job: &LightJob, measure: bool) -> usize {
+        let (system, opts) = (self.system, self.opts);
+        let (_, downscale) = self.grid_and_downscale(b);
+        let d =
+            dispersion_px(system, path, job.theta, job.lo, job.hi, self.frame) / downscale as f64;
+        let m = if d.is_finite() {
+            ((d / opts.band_spacing_px).ceil() as usize).saturating_add(1)
+        } else {
+            opts.bands
         };
+        let m = m.min(opts.bands).max(opts.min_bands.min(opts.bands)).max(1);
+        if !measure || m >= opts.bands || !opts.spectral_tolerance.is_finite() {
+            return m;
+        }
+        match self.spectral_shape(path, b, job) {
+            Some(shape) => {
+                job.colours
+                    .bins_for(path, &shape, m, opts.bands, opts.spectral_tolerance)
+            }
+            None => m,
+        }
+    }
+
+    /// A kept ghost's job: its grid, coarse factor, `groups` bands and their colours.
+    fn ghost_job(
+        &self,
+        path: GhostPath,
+        b: GhostBounds,
+        groups: usize,
+        job: &LightJob,
+        bins: &mut Bins,
+    ) -> GhostJob {
+        let system = self.system;
+        let (grid, downscale) = self.grid_and_downscale(&b);
         // The ghost's own sampling: `groups` equal bins, each traced at its centre in the colour
         // of its whole bin. (Grouping the light's bands unevenly instead — 31 into 16, say —
         // draws copies of uneven weight and spacing.)
@@ -598,6 +683,16 @@ impl<'p, 'o> Planner<'p, 'o> {
 /// Drawn pixels by which neighbouring bands of a ghost may move it (paraxially), for the
 /// presets: at half a pixel the copies blend under the one-pixel feather of its edge.
 pub const BAND_SPACING_PX: f64 = 0.5;
+
+/// Rays a side of the grid a ghost's flux is measured on at each of [`SHAPE_NODES_NM`] for
+/// its spectral shape ([`PlanOptions::spectral_tolerance`]): only the flux's variation with
+/// the wavelength counts, and the same grid at every node keeps the sampling error common.
+pub const SHAPE_GRID: usize = 13;
+
+/// The share of a frame's drawn ghost light (on the frame) from which a ghost's spectral
+/// shape is measured ([`PlanOptions::spectral_tolerance`]): a dimmer ghost's colour error
+/// moves the frame's light by less than this times its own error.
+pub const SHAPE_MIN_SHARE: f64 = 5e-3;
 
 /// Wavelength step (nm) of the interface tables a plan builds exactly: a band between two
 /// of them takes their interpolation (`InterfaceTableSet::between`: linear, with the entries
@@ -664,6 +759,15 @@ impl LensTables {
             return Some(t);
         }
         Some(Arc::clone(held.entry(key).or_insert(t)))
+    }
+
+    /// The held tables at `lambda_nm` when it is one of the steps (exact there).
+    fn node(&self, lambda_nm: f64) -> Option<&InterfaceTableSet> {
+        let k = (lambda_nm - Self::RANGE_NM[0]) / TABLE_STEP_NM;
+        if (k - k.round()).abs() > 1e-9 {
+            return None;
+        }
+        self.nodes.get(k.round() as usize)
     }
 
     /// True when these are `system`'s tables.

@@ -222,6 +222,18 @@ impl Quality {
         }
     }
 
+    /// The colour error a ghost's spectral sampling may make where its flux varies across the
+    /// spectrum other than its throughput at normal incidence does
+    /// ([`crate::colour::GhostColours::bins_error`]): a ghost takes at least the fewest bands
+    /// that keep it within this ([`crate::plan::PlanOptions::spectral_tolerance`]).
+    pub fn spectral_tolerance(self) -> f64 {
+        match self {
+            Quality::Fast => 2e-2,
+            Quality::Default => 5e-3,
+            Quality::High => 2e-3,
+        }
+    }
+
     /// Four-reflection paths whose energy bound (of the direct image's energy) is below this
     /// are left out before their own bounds are traced (`ghost::FourReflectionBounds`). Two-
     /// reflection ghosts are culled by [`Quality::dim_budget`] instead, once traced.
