@@ -18,6 +18,7 @@ use serde::Serialize;
 
 use super::render::{IrisArgs, auto_exposure, parse_size};
 use crate::backend::{BackendChoice, BackendReport, GhostBackend};
+use crate::file_watch::WatchedFile;
 use crate::label;
 use crate::lens_library;
 use crate::output::{ToneMap, ToneOperator, save_image};
@@ -150,6 +151,10 @@ pub(crate) struct Algo {
     pub plugin: Result<LoadedPlugin, String>,
     /// The library file to watch: the plugin's, or the path the spec names.
     pub library: Option<PathBuf>,
+    /// With `--watch`: the library's version when it was loaded (taken before the load for a
+    /// path, just after discovery for a name), so a rebuild during the first comparison is
+    /// not missed.
+    pub watched: Option<WatchedFile>,
 }
 
 impl Algo {
@@ -159,7 +164,9 @@ impl Algo {
     /// in place, rather than replacing it as cargo does, would change code under it).
     pub(crate) fn resolve(spec: &str, explicit: &[PathBuf], watch: bool) -> Algo {
         let (name, _) = split_spec(spec);
-        let plugin = if watch && plugin_dirs::is_library_path(name) {
+        let by_path = plugin_dirs::is_library_path(name);
+        let mut watched = (watch && by_path).then(|| WatchedFile::new(Path::new(name)));
+        let plugin = if watch && by_path {
             flarebench_sdk::abi::host::load_fresh_copy(Path::new(name))
                 .map_err(|e| format!("plugin `{name}`: {e}"))
         } else {
@@ -167,13 +174,17 @@ impl Algo {
         };
         let library = match &plugin {
             Ok(p) => Some(p.path.clone()),
-            Err(_) if plugin_dirs::is_library_path(name) => Some(PathBuf::from(name)),
+            Err(_) if by_path => Some(PathBuf::from(name)),
             Err(_) => None,
         };
+        if watch && watched.is_none() {
+            watched = library.as_deref().map(WatchedFile::new);
+        }
         Algo {
             spec: spec.to_string(),
             plugin,
             library,
+            watched,
         }
     }
 }
@@ -296,8 +307,6 @@ fn diff_path(p: &Path) -> PathBuf {
 #[derive(Debug)]
 pub(crate) struct Setup {
     pub sys: flarebench_sdk::LensSystem,
-    /// The lens file read.
-    pub lens_path: PathBuf,
     pub scene: Scene,
     pub reference: Option<HdrImage>,
     pub reference_ms: Option<f64>,
@@ -306,7 +315,6 @@ pub(crate) struct Setup {
 impl Setup {
     /// Loads the lens and renders (or reads) the reference.
     pub(crate) fn new(args: &CompareArgs, quiet: bool) -> anyhow::Result<Setup> {
-        let lens_path = lens_library::resolve(&args.lens)?;
         let loaded = lens_library::load(&args.lens, quiet || args.json)?;
         let sys = loaded.system;
         let (w, h) = args.size;
@@ -345,7 +353,6 @@ impl Setup {
         };
         Ok(Setup {
             sys,
-            lens_path,
             scene,
             reference,
             reference_ms,
@@ -438,6 +445,12 @@ pub(crate) fn compare(
 }
 
 pub fn run(args: &CompareArgs, quiet: bool) -> anyhow::Result<()> {
+    // The lens file's version before it is read, so a save during the first comparison is seen.
+    let lens_watch = if args.watch {
+        Some(WatchedFile::new(&lens_library::resolve(&args.lens)?))
+    } else {
+        None
+    };
     let setup = Setup::new(args, quiet)?;
     let mut backend = GhostBackend::open(args.backend)?;
     let algos: Vec<Algo> = args
@@ -446,8 +459,8 @@ pub fn run(args: &CompareArgs, quiet: bool) -> anyhow::Result<()> {
         .map(|spec| Algo::resolve(spec, &args.plugins, args.watch))
         .collect();
     let report = compare(args, &setup, &algos, &mut backend, quiet)?;
-    if args.watch {
-        return watch::watch(args, setup, algos, backend, &report, quiet);
+    if let Some(lens_watch) = lens_watch {
+        return watch::watch(args, setup, lens_watch, algos, backend, &report, quiet);
     }
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);

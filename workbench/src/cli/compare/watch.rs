@@ -11,7 +11,7 @@
 //! a parameter the `--algo` arguments name that it no longer has) leaves the previous version
 //! in use, with the error shown; a lens file that fails to load leaves the previous lens.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use flarebench_sdk::abi::host;
 use flarebench_sdk::abi::params::parse_values;
@@ -88,20 +88,20 @@ fn reload(path: &Path, algos: &mut [Algo]) -> Result<String, String> {
 pub(super) fn watch(
     args: &CompareArgs,
     mut setup: Setup,
+    mut lens: WatchedFile,
     mut algos: Vec<Algo>,
     mut backend: GhostBackend,
     first: &CompareReport,
     quiet: bool,
 ) -> anyhow::Result<()> {
     print(&Event::Compared(first), args.json)?;
-    let mut paths: Vec<PathBuf> = Vec::new();
-    for p in algos.iter().filter_map(|a| a.library.clone()) {
-        if !paths.contains(&p) {
-            paths.push(p);
+    // One watch per library (several `--algo`s may name the same), the first one's.
+    let mut libraries: Vec<WatchedFile> = Vec::new();
+    for w in algos.iter_mut().filter_map(|a| a.watched.take()) {
+        if !libraries.iter().any(|l| l.path() == w.path()) {
+            libraries.push(w);
         }
     }
-    let mut libraries: Vec<WatchedFile> = paths.iter().map(|p| WatchedFile::new(p)).collect();
-    let mut lens = WatchedFile::new(&setup.lens_path);
     if !quiet && !args.json {
         eprintln!(
             "watching {} plugin librar{} and the lens file; Ctrl-C ends",
