@@ -61,6 +61,16 @@ fn new_plugin(name: &str) -> PathBuf {
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(text.contains("cargo build --manifest-path"), "{text}");
     assert!(text.contains("--watch"), "{text}");
+    // Inside this workspace (the target directory usually is), the note says what to add to
+    // its members.
+    let (krate_abs, root_abs) = (
+        krate.canonicalize().unwrap(),
+        root().canonicalize().unwrap(),
+    );
+    if let Ok(member) = krate_abs.strip_prefix(&root_abs) {
+        let add = format!("add \"{}\" to `members`", member.display());
+        assert!(text.contains(&add), "{text}");
+    }
     std::fs::copy(root().join("Cargo.lock"), krate.join("Cargo.lock")).unwrap();
     krate
 }
@@ -282,6 +292,10 @@ fn compare_watch_reloads_a_rebuilt_plugin_and_keeps_it_when_a_broken_library_fol
             "1",
             "--backend",
             "cpu",
+            // The reference is rendered once: the lens reload below reads it back (the
+            // lens is the same system).
+            "--reference-file",
+            tmp.path().join("reference.exr").to_str().unwrap(),
             "--json",
             "--watch",
             "--watch-events",

@@ -122,11 +122,16 @@ pub fn run(args: &NewArgs, quiet: bool) -> anyhow::Result<()> {
         sdk.display()
     );
     if let Some(ws) = enclosing_workspace(&dir) {
+        let member = ws
+            .parent()
+            .and_then(|root| dir.strip_prefix(root).ok())
+            .unwrap_or(&dir);
         println!(
             "note: {d} lies inside the cargo workspace of {}; the crate has a [workspace] table of \
              its own, so it builds on its own (to make it a member instead, remove that table and \
-             add its directory to `members` there)",
-            ws.display()
+             add \"{}\" to `members` there)",
+            ws.display(),
+            member.display()
         );
     }
     println!();
