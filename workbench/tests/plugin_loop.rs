@@ -321,6 +321,7 @@ fn compare_watch_reloads_a_rebuilt_plugin_and_keeps_it_when_a_broken_library_fol
     let reloaded = w.expect("reloaded");
     assert_eq!(reloaded["what"], "plugin");
     assert_eq!(reloaded["name"], "loop-glow");
+    assert_eq!(reloaded["defaults"][1], serde_json::json!(["gain", "2.5"]));
     let second = w.expect("compared");
     assert_eq!(param(&second, "gain"), "2.5");
     let e2 = relative_energy(&second);

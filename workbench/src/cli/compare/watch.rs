@@ -26,11 +26,14 @@ use crate::plugin_dirs::is_library_path;
 #[derive(Debug, Serialize)]
 #[serde(tag = "event", rename_all = "snake_case")]
 enum Event<'a> {
-    /// A changed file was loaded; `what` is `plugin` or `lens`, `name` the plugin's or lens's.
+    /// A changed file was loaded; `what` is `plugin` or `lens`, `name` the plugin's or lens's;
+    /// for a plugin, `defaults` are its parameters' defaults as text.
     Reloaded {
         file: String,
         what: &'static str,
         name: String,
+        #[serde(skip_serializing_if = "Vec::is_empty")]
+        defaults: Vec<(String, String)>,
     },
     /// A changed file could not be loaded: the previous version stays in use.
     ReloadFailed {
@@ -48,8 +51,17 @@ fn print(event: &Event<'_>, json: bool) -> anyhow::Result<()> {
         return Ok(());
     }
     match event {
-        Event::Reloaded { file, what, name } => {
+        Event::Reloaded {
+            file,
+            what,
+            name,
+            defaults,
+        } => {
             println!("\nreloaded {what} `{name}` from {file}");
+            if !defaults.is_empty() {
+                let d: Vec<String> = defaults.iter().map(|(k, v)| format!("{k}={v}")).collect();
+                println!("defaults: {}", d.join(", "));
+            }
         }
         Event::ReloadFailed { file, what, error } => {
             println!("\ncould not reload {file}; the previous {what} stays in use: {error}");
@@ -61,8 +73,8 @@ fn print(event: &Event<'_>, json: bool) -> anyhow::Result<()> {
 
 /// Loads a fresh copy of the library at `path` for every algorithm that uses it, once all of
 /// them accept it (the plugin they name, their parameters); else changes nothing. The plugin's
-/// name, or why it was refused.
-fn reload(path: &Path, algos: &mut [Algo]) -> Result<String, String> {
+/// name and parameter defaults, or why it was refused.
+fn reload(path: &Path, algos: &mut [Algo]) -> Result<(String, Vec<(String, String)>), String> {
     let plugin = host::load_fresh_copy(path).map_err(|e| e.to_string())?;
     for algo in algos.iter().filter(|a| a.library.as_deref() == Some(path)) {
         let (name, params) = split_spec(&algo.spec);
@@ -80,7 +92,12 @@ fn reload(path: &Path, algos: &mut [Algo]) -> Result<String, String> {
     {
         algo.plugin = Ok(plugin.clone());
     }
-    Ok(plugin.name)
+    let defaults = plugin
+        .params
+        .iter()
+        .map(|p| (p.name.clone(), p.format_value(p.default)))
+        .collect();
+    Ok((plugin.name, defaults))
 }
 
 /// Prints `first`, then watches and compares again on every change until Ctrl-C (or
@@ -120,12 +137,13 @@ pub(super) fn watch(
             events += 1;
             let file = lib.path().display().to_string();
             let event = match reload(lib.path(), &mut algos) {
-                Ok(name) => {
+                Ok((name, defaults)) => {
                     changed = true;
                     Event::Reloaded {
                         file,
                         what: "plugin",
                         name,
+                        defaults,
                     }
                 }
                 Err(error) => Event::ReloadFailed {
@@ -147,6 +165,7 @@ pub(super) fn watch(
                         file,
                         what: "lens",
                         name: setup.sys.name.clone(),
+                        defaults: Vec::new(),
                     }
                 }
                 Err(e) => Event::ReloadFailed {
