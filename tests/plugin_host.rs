@@ -440,6 +440,48 @@ fn a_file_that_is_not_a_library_gives_the_loaders_own_reason() {
     assert!(matches!(e, PluginLoadError::NoEntry { .. }), "{e:?}");
 }
 
+#[test]
+fn a_fresh_copy_loads_beside_the_original_renders_the_same_and_leaves_no_file() {
+    let path = plugin_library("example_glow");
+    let original = host::load(&path).unwrap();
+    let copies: Vec<LoadedPlugin> = (0..2)
+        .map(|_| host::load_fresh_copy(&path).unwrap())
+        .collect();
+    let lens = load_lens("heliar-tronnier");
+    let s = scene(120, 80, 36.0, 2.0, 30.0);
+    let render = |p: &LoadedPlugin| {
+        let mut inst = p.instantiate().unwrap();
+        inst.prepare(&lens).unwrap();
+        inst.render(&s, &values(p, "sigma_px=4")).unwrap().image
+    };
+    // Instances of the original and of both copies live at once.
+    let first = render(&original);
+    for c in &copies {
+        assert_eq!(c.path, path, "a copy is named by its original");
+        assert_eq!(c.name, "example-glow");
+        assert!(render(c).pixels == first.pixels);
+    }
+    // The copies' files are removed once loaded (the mappings keep them).
+    #[cfg(unix)]
+    {
+        let dir =
+            std::env::temp_dir().join(format!("flarebench-plugin-copies-{}", std::process::id()));
+        let left: Vec<_> = std::fs::read_dir(&dir).unwrap().flatten().collect();
+        assert!(left.is_empty(), "{left:?}");
+    }
+    // A copy that cannot be loaded is an error about the original file.
+    let dir = build_dir().join("misfit-plugins");
+    std::fs::create_dir_all(&dir).unwrap();
+    let bad = dir.join("libfresh_garbage.so");
+    std::fs::write(&bad, "not a library").unwrap();
+    let e = host::load_fresh_copy(&bad).unwrap_err();
+    assert!(matches!(e, PluginLoadError::Open { .. }), "{e:?}");
+    assert_eq!(e.path(), bad);
+    assert!(e.to_string().starts_with(bad.to_str().unwrap()), "{e}");
+    let e = host::load_fresh_copy(&dir.join("libmissing.so")).unwrap_err();
+    assert!(matches!(e, PluginLoadError::Copy { .. }), "{e:?}");
+}
+
 /// A shared library that exports nothing of ours.
 fn misfit_no_entry(dir: &Path) -> PathBuf {
     let src = dir.join("no_entry.rs");

@@ -9,6 +9,7 @@ pub mod compose;
 pub mod document;
 #[cfg(feature = "tui")]
 pub mod edit;
+pub mod file_watch;
 pub mod input_image;
 pub mod label;
 pub mod lens_drawing;
@@ -17,6 +18,7 @@ pub mod link;
 pub mod output;
 pub mod panics;
 pub mod plugin_dirs;
+pub mod plugin_template;
 pub mod precomputed;
 pub mod reference_file;
 pub mod report;

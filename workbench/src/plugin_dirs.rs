@@ -104,10 +104,16 @@ pub fn discover(explicit: &[PathBuf]) -> Vec<Found> {
     found
 }
 
-/// The plugin `spec` names: a path to a library (anything with a `/` or the library suffix),
-/// else a plugin name among those discovered.
+/// Whether `spec` names a library by its path (it has a `/` or ends in the library suffix)
+/// rather than a plugin by its name.
+pub fn is_library_path(spec: &str) -> bool {
+    spec.contains(std::path::MAIN_SEPARATOR) || spec.ends_with(std::env::consts::DLL_SUFFIX)
+}
+
+/// The plugin `spec` names: a path to a library (see [`is_library_path`]), else a plugin name
+/// among those discovered.
 pub fn find(spec: &str, explicit: &[PathBuf]) -> anyhow::Result<LoadedPlugin> {
-    if spec.contains(std::path::MAIN_SEPARATOR) || spec.ends_with(std::env::consts::DLL_SUFFIX) {
+    if is_library_path(spec) {
         return host::load(Path::new(spec)).with_context(|| format!("plugin `{spec}`"));
     }
     let found = discover(explicit);

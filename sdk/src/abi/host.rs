@@ -86,6 +86,42 @@ pub enum PluginLoadError {
         field: String,
         reason: String,
     },
+    /// The library could not be copied for a fresh load ([`load_fresh_copy`]).
+    #[error("{}: could not copy the library to load a fresh copy: {detail}", path.display())]
+    Copy { path: PathBuf, detail: String },
+}
+
+impl PluginLoadError {
+    /// The library the error is about.
+    pub fn path(&self) -> &Path {
+        match self {
+            PluginLoadError::Open { path, .. }
+            | PluginLoadError::NoEntry { path, .. }
+            | PluginLoadError::NullHeader { path }
+            | PluginLoadError::BadMagic { path, .. }
+            | PluginLoadError::AbiMajor { path, .. }
+            | PluginLoadError::ShortHeader { path, .. }
+            | PluginLoadError::PanicAbort { path }
+            | PluginLoadError::BadHeader { path, .. }
+            | PluginLoadError::Copy { path, .. } => path,
+        }
+    }
+
+    /// The same error about the library at `to` (a fresh copy's error told of its original).
+    fn with_path(mut self, to: &Path) -> Self {
+        match &mut self {
+            PluginLoadError::Open { path, .. }
+            | PluginLoadError::NoEntry { path, .. }
+            | PluginLoadError::NullHeader { path }
+            | PluginLoadError::BadMagic { path, .. }
+            | PluginLoadError::AbiMajor { path, .. }
+            | PluginLoadError::ShortHeader { path, .. }
+            | PluginLoadError::PanicAbort { path }
+            | PluginLoadError::BadHeader { path, .. }
+            | PluginLoadError::Copy { path, .. } => *path = to.to_path_buf(),
+        }
+        self
+    }
 }
 
 /// What went wrong calling a plugin.
@@ -256,6 +292,56 @@ pub fn load(path: &Path) -> Result<LoadedPlugin, PluginLoadError> {
     // the life of the library, which is never unloaded.
     let h: &'static PluginHeader = unsafe { &*ptr };
     read_header(path, h)
+}
+
+/// A directory of this process's own for fresh copies ([`load_fresh_copy`]).
+fn copies_dir() -> PathBuf {
+    std::env::temp_dir().join(format!("flarebench-plugin-copies-{}", std::process::id()))
+}
+
+/// Loads a fresh copy of the plugin library at `path`, beside any copy of it already loaded:
+/// the file is copied to a path of its own (this process's directory in the system's
+/// temporary directory, a new number each time) and the copy is loaded, so the dynamic loader
+/// maps the new code instead of handing back the image it already has for `path` (it knows a
+/// library by its path and its file's identity). The returned plugin's `path` and any error
+/// name `path`, not the copy.
+///
+/// Every copy stays loaded for the life of the process, like every library ([`load`]): code
+/// from an earlier copy may still be running or referenced (an instance, a pointer into its
+/// static data). On Unix the copy's file is removed as soon as it is loaded (the mapping keeps
+/// it alive), so nothing is left behind; on Windows a loaded DLL cannot be removed, and the
+/// copies stay in the temporary directory.
+pub fn load_fresh_copy(path: &Path) -> Result<LoadedPlugin, PluginLoadError> {
+    static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let copy_error = |detail: String| PluginLoadError::Copy {
+        path: path.to_path_buf(),
+        detail,
+    };
+    let file_name = path
+        .file_name()
+        .ok_or_else(|| copy_error("the path names no file".into()))?;
+    let dir = copies_dir();
+    std::fs::create_dir_all(&dir)
+        .map_err(|e| copy_error(format!("creating {}: {e}", dir.display())))?;
+    let n = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let mut name = std::ffi::OsString::from(format!("{n}-"));
+    name.push(file_name);
+    let copy = dir.join(name);
+    // A file left by an earlier process of the same id (only possible where copies are kept).
+    let _ = std::fs::remove_file(&copy);
+    std::fs::copy(path, &copy).map_err(|e| copy_error(format!("to {}: {e}", copy.display())))?;
+    let loaded = load(&copy);
+    if cfg!(unix) {
+        // The loaded image does not need its file any more (a failed load has nothing to keep).
+        let _ = std::fs::remove_file(&copy);
+    }
+    match loaded {
+        Ok(mut p) => {
+            p.path = path.to_path_buf();
+            Ok(p)
+        }
+        Err(e) => Err(e.with_path(path)),
+    }
 }
 
 fn read_header(path: &Path, h: &'static PluginHeader) -> Result<LoadedPlugin, PluginLoadError> {

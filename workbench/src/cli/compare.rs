@@ -18,6 +18,7 @@ use serde::Serialize;
 
 use super::render::{IrisArgs, auto_exposure, parse_size};
 use crate::backend::{BackendChoice, BackendReport, GhostBackend};
+use crate::file_watch::WatchedFile;
 use crate::label;
 use crate::lens_library;
 use crate::output::{ToneMap, ToneOperator, save_image};
@@ -28,6 +29,8 @@ use crate::stats::median;
 use crate::sweep::points::split_algo as split_spec;
 use crate::table::Table;
 use flarebench_sdk::ghost::ReflectionOrder;
+
+mod watch;
 
 #[derive(Debug, Args)]
 pub struct CompareArgs {
@@ -72,6 +75,15 @@ pub struct CompareArgs {
     /// plugins' own pixels are theirs either way. docs/plugins.md.
     #[arg(long, value_enum, default_value_t = BackendChoice::Auto)]
     pub backend: BackendChoice,
+    /// After the comparison, watch the plugins' library files and the lens file: when one is
+    /// rebuilt or saved, load it afresh (beside the old, which stays loaded) and compare again.
+    /// A library that fails to load leaves the previous one in use, with the error shown.
+    /// Ctrl-C ends it. With --json, one JSON object per line and event.
+    #[arg(long)]
+    pub watch: bool,
+    /// With --watch: end after this many changes (reloads and failed reloads), for tests.
+    #[arg(long, hide = true, requires = "watch")]
+    pub watch_events: Option<u32>,
 }
 
 /// One algorithm's results.
@@ -130,14 +142,62 @@ fn peak_rss_mib() -> Option<f64> {
     Some(kib / 1024.0)
 }
 
-/// Runs one algorithm: load, prepare, `runs` renders, its mesh drawn by `backend`.
+/// An `--algo` argument and the plugin it names.
+#[derive(Debug)]
+pub(crate) struct Algo {
+    /// As given to `--algo`.
+    pub spec: String,
+    /// The plugin in use (loaded at the start or by the last good reload), or why none is.
+    pub plugin: Result<LoadedPlugin, String>,
+    /// The library file to watch: the plugin's, or the path the spec names.
+    pub library: Option<PathBuf>,
+    /// With `--watch`: the library's version when it was loaded (taken before the load for a
+    /// path, just after discovery for a name), so a rebuild during the first comparison is
+    /// not missed.
+    pub watched: Option<WatchedFile>,
+}
+
+impl Algo {
+    /// Resolves `spec` (a plugin name or a library path, with parameters) to its plugin. For
+    /// `--watch`, a library given by path is loaded as a fresh copy from the start, so the file
+    /// watched is never the one mapped into the process (a tool that rewrites a loaded library
+    /// in place, rather than replacing it as cargo does, would change code under it).
+    pub(crate) fn resolve(spec: &str, explicit: &[PathBuf], watch: bool) -> Algo {
+        let (name, _) = split_spec(spec);
+        let by_path = plugin_dirs::is_library_path(name);
+        let mut watched = (watch && by_path).then(|| WatchedFile::new(Path::new(name)));
+        let plugin = if watch && by_path {
+            flarebench_sdk::abi::host::load_fresh_copy(Path::new(name))
+                .map_err(|e| format!("plugin `{name}`: {e}"))
+        } else {
+            plugin_dirs::find(name, explicit).map_err(|e| format!("{e:#}"))
+        };
+        let library = match &plugin {
+            Ok(p) => Some(p.path.clone()),
+            Err(_) if by_path => Some(PathBuf::from(name)),
+            Err(_) => None,
+        };
+        if watch && watched.is_none() {
+            watched = library.as_deref().map(WatchedFile::new);
+        }
+        Algo {
+            spec: spec.to_string(),
+            plugin,
+            library,
+            watched,
+        }
+    }
+}
+
+/// Runs one algorithm: prepare, `runs` renders, its mesh drawn by `backend`.
 fn run_algo(
-    spec: &str,
+    algo: &Algo,
     args: &CompareArgs,
     lens: &flarebench_sdk::LensSystem,
     scene: &Scene,
     backend: &mut GhostBackend,
 ) -> (AlgoResult, Option<HdrImage>) {
+    let spec = algo.spec.as_str();
     let (name, param_text) = split_spec(spec);
     let mut r = AlgoResult {
         spec: spec.to_string(),
@@ -154,7 +214,7 @@ fn run_algo(
         failure: None,
     };
     let mut run = |r: &mut AlgoResult| -> anyhow::Result<HdrImage> {
-        let plugin: LoadedPlugin = plugin_dirs::find(name, &args.plugins)?;
+        let plugin: &LoadedPlugin = algo.plugin.as_ref().map_err(|e| anyhow::anyhow!("{e}"))?;
         r.plugin = plugin.name.clone();
         r.path = plugin.path.display().to_string();
         let values =
@@ -242,54 +302,83 @@ fn diff_path(p: &Path) -> PathBuf {
     p.with_file_name(name)
 }
 
-pub fn run(args: &CompareArgs, quiet: bool) -> anyhow::Result<()> {
-    let loaded = lens_library::load(&args.lens, quiet || args.json)?;
-    let sys = &loaded.system;
-    let (w, h) = args.size;
-    let frame = Frame {
-        width: w,
-        height: h,
-        film_width_mm: sys.film_width_mm,
-        film_height_mm: sys.film_width_mm * h as f64 / w as f64,
-    };
-    let aperture = args.iris.aperture()?;
-    let scene = Scene {
-        lights: args.lights.iter().map(LightSpec::scene_light).collect(),
-        frame,
-        aperture: aperture.clone(),
-    };
+/// The lens, the scene and the reference of a comparison (made again when the lens file
+/// changes under `--watch`).
+#[derive(Debug)]
+pub(crate) struct Setup {
+    pub sys: flarebench_sdk::LensSystem,
+    pub scene: Scene,
+    pub reference: Option<HdrImage>,
+    pub reference_ms: Option<f64>,
+}
 
-    let (reference, reference_ms) = if args.no_reference {
-        (None, None)
-    } else {
-        let file = args.reference_file.as_deref();
-        if !quiet && !args.json && !file.is_some_and(|f| f.exists()) {
-            eprintln!("rendering the reference …");
-        }
-        let t = Instant::now();
-        let (img, source) = reference_for(
-            sys,
-            &aperture,
+impl Setup {
+    /// Loads the lens and renders (or reads) the reference.
+    pub(crate) fn new(args: &CompareArgs, quiet: bool) -> anyhow::Result<Setup> {
+        let loaded = lens_library::load(&args.lens, quiet || args.json)?;
+        let sys = loaded.system;
+        let (w, h) = args.size;
+        let frame = Frame {
+            width: w,
+            height: h,
+            film_width_mm: sys.film_width_mm,
+            film_height_mm: sys.film_width_mm * h as f64 / w as f64,
+        };
+        let aperture = args.iris.aperture()?;
+        let scene = Scene {
+            lights: args.lights.iter().map(LightSpec::scene_light).collect(),
             frame,
-            &args.lights,
-            file,
-            ReflectionOrder::Two,
-        )?;
-        if !quiet && !args.json && source != ReferenceSource::Rendered {
-            eprintln!("reference {source}");
-        }
-        (Some(img), Some(ms(t)))
-    };
+            aperture: aperture.clone(),
+        };
+        let (reference, reference_ms) = if args.no_reference {
+            (None, None)
+        } else {
+            let file = args.reference_file.as_deref();
+            if !quiet && !args.json && !file.is_some_and(|f| f.exists()) {
+                eprintln!("rendering the reference …");
+            }
+            let t = Instant::now();
+            let (img, source) = reference_for(
+                &sys,
+                &aperture,
+                frame,
+                &args.lights,
+                file,
+                ReflectionOrder::Two,
+            )?;
+            if !quiet && !args.json && source != ReferenceSource::Rendered {
+                eprintln!("reference {source}");
+            }
+            (Some(img), Some(ms(t)))
+        };
+        Ok(Setup {
+            sys,
+            scene,
+            reference,
+            reference_ms,
+        })
+    }
+}
 
-    let mut backend = GhostBackend::open(args.backend)?;
+/// Renders every algorithm, writes the side-by-side and difference images, and returns the
+/// report.
+pub(crate) fn compare(
+    args: &CompareArgs,
+    setup: &Setup,
+    algos: &[Algo],
+    backend: &mut GhostBackend,
+    quiet: bool,
+) -> anyhow::Result<CompareReport> {
+    let (w, h) = args.size;
+    let reference = &setup.reference;
     let mut results = Vec::new();
     let mut images = Vec::new();
-    for spec in &args.algos {
+    for algo in algos {
         if !quiet && !args.json {
-            eprintln!("{spec} …");
+            eprintln!("{} …", algo.spec);
         }
-        let (mut r, img) = run_algo(spec, args, sys, &scene, &mut backend);
-        if let (Some(img), Some(reference)) = (&img, &reference) {
+        let (mut r, img) = run_algo(algo, args, &setup.sys, &setup.scene, backend);
+        if let (Some(img), Some(reference)) = (&img, reference) {
             let c = img.compare(reference)?;
             r.error = Some(ErrorReport {
                 relative_rmse: c.relative_rmse,
@@ -311,7 +400,7 @@ pub fn run(args: &CompareArgs, quiet: bool) -> anyhow::Result<()> {
         operator: ToneOperator::Aces,
     };
     let mut tiles: Vec<(String, &HdrImage)> = Vec::new();
-    if let Some(r) = &reference {
+    if let Some(r) = reference {
         tiles.push(("reference".into(), r));
     }
     for (r, img) in results.iter().zip(&images) {
@@ -323,7 +412,7 @@ pub fn run(args: &CompareArgs, quiet: bool) -> anyhow::Result<()> {
         save_image(&side_by_side(&tiles, w, h, white), &args.output, &tone)?;
     }
     let mut difference_output = None;
-    if let Some(reference) = &reference {
+    if let Some(reference) = reference {
         let diffs: Vec<(String, HdrImage)> = results
             .iter()
             .zip(&images)
@@ -342,24 +431,43 @@ pub fn run(args: &CompareArgs, quiet: bool) -> anyhow::Result<()> {
             difference_output = Some(path.display().to_string());
         }
     }
-
-    let failed = results.iter().filter(|r| r.failure.is_some()).count();
-    let report = CompareReport {
-        lens: sys.name.clone(),
+    Ok(CompareReport {
+        lens: setup.sys.name.clone(),
         width: w,
         height: h,
         runs: args.runs,
-        reference_ms,
+        reference_ms: setup.reference_ms,
         output: args.output.display().to_string(),
         difference_output,
         backend: backend.report().clone(),
         algorithms: results,
+    })
+}
+
+pub fn run(args: &CompareArgs, quiet: bool) -> anyhow::Result<()> {
+    // The lens file's version before it is read, so a save during the first comparison is seen.
+    let lens_watch = if args.watch {
+        Some(WatchedFile::new(&lens_library::resolve(&args.lens)?))
+    } else {
+        None
     };
+    let setup = Setup::new(args, quiet)?;
+    let mut backend = GhostBackend::open(args.backend)?;
+    let algos: Vec<Algo> = args
+        .algos
+        .iter()
+        .map(|spec| Algo::resolve(spec, &args.plugins, args.watch))
+        .collect();
+    let report = compare(args, &setup, &algos, &mut backend, quiet)?;
+    if let Some(lens_watch) = lens_watch {
+        return watch::watch(args, setup, lens_watch, algos, backend, &report, quiet);
+    }
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
         print!("{}", text(&report));
     }
+    let failed = report.failed();
     if failed > 0 {
         bail!(
             "{failed} of {} algorithms failed (see above)",
@@ -369,7 +477,17 @@ pub fn run(args: &CompareArgs, quiet: bool) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn text(r: &CompareReport) -> String {
+impl CompareReport {
+    /// How many algorithms failed.
+    pub fn failed(&self) -> usize {
+        self.algorithms
+            .iter()
+            .filter(|r| r.failure.is_some())
+            .count()
+    }
+}
+
+pub(crate) fn text(r: &CompareReport) -> String {
     let mut s = format!(
         "{} ({}×{}), {} run{} each",
         r.lens,

@@ -61,7 +61,7 @@ pub enum Command {
     /// Every ghost of one light by the independent Monte-Carlo reference, the mesh reference
     /// and the renderer: energies, centroids, second moments, images.
     Crosscheck(crosscheck::CrosscheckArgs),
-    /// Flare algorithm plugins: `plugins list`.
+    /// Flare algorithm plugins: `plugins list`, `plugins new NAME`.
     Plugins(plugins::PluginsArgs),
     /// Error against run time over algorithms, presets and the planner's thresholds: CSV,
     /// JSON, plots with the Pareto front, contact sheets and an index.html.

@@ -1,6 +1,8 @@
 //! `flarebench plugins list`: every plugin library found (beside the binary, in
 //! `FLAREBENCH_PLUGIN_PATH`, or given with `--plugin`), with its kind, ABI version and
-//! parameters — and every broken one with the reason.
+//! parameters — and every broken one with the reason. `plugins new` is in [`new`].
+
+mod new;
 
 use std::path::PathBuf;
 
@@ -21,6 +23,9 @@ pub struct PluginsArgs {
 pub enum PluginsCommand {
     /// List the plugins found and their parameters; broken ones with the reason.
     List(ListArgs),
+    /// Write a new plugin crate made from the plugin guide's example (docs/plugins.md), ready
+    /// to build and load.
+    New(new::NewArgs),
 }
 
 #[derive(Debug, Args)]
@@ -98,9 +103,10 @@ fn entry(f: &Found) -> PluginEntry {
     }
 }
 
-pub fn run(args: &PluginsArgs, _quiet: bool) -> anyhow::Result<()> {
+pub fn run(args: &PluginsArgs, quiet: bool) -> anyhow::Result<()> {
     match &args.command {
         PluginsCommand::List(a) => list(a),
+        PluginsCommand::New(a) => new::run(a, quiet),
     }
 }
 

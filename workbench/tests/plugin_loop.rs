@@ -1,0 +1,357 @@
+//! The plugin author's loop end to end: `plugins new` writes a crate that cargo builds and the
+//! workbench loads, drawing what the guide's example draws; `compare --watch` reloads it when it
+//! is rebuilt with another default, keeps the previous one when the library is broken, and
+//! compares again when the lens file changes.
+//!
+//! The new crates are built with cargo (offline, with the workspace's `Cargo.lock`) into
+//! `target/plugin-tests/`, which persists between runs: the first run compiles the sdk and its
+//! dependencies for the new crates' profile (a few minutes here); later runs compile only the
+//! small plugin crate. It is not the workspace's own `target/debug`, where a library would be
+//! found beside the binary by every other test, and where the sdk is built with other features
+//! (the host's) anyway.
+
+mod common;
+
+use std::io::BufRead;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::mpsc;
+use std::time::Duration;
+
+use common::{flarebench, json, temp_dir};
+use flarebench_sdk::abi::author::{Scene, SceneLight};
+use flarebench_sdk::abi::host;
+use flarebench_sdk::abi::params::parse_values;
+use flarebench_sdk::aperture::Aperture;
+use flarebench_sdk::color::LightSpectrum;
+use flarebench_sdk::frame::Frame;
+use flarebench_test_support::{build_dir, library_file_name, load_lens, plugin_library};
+use serde_json::Value;
+
+/// Relative difference allowed between the energy ratio of two glows and the ratio of their
+/// gains: each pixel is computed in f64 and rounded to f32 (a relative 6e-8), and the energies
+/// are sums of such pixels; 1e-5 leaves room and is far below any real change of `gain`.
+const GAIN_RATIO_TOL: f64 = 1e-5;
+
+/// Longest wait for the watcher's next line before the test gives up (a guard against a hang,
+/// not a timing assertion: a debug build of the plugin and a comparison take seconds).
+const LINE_WAIT: Duration = Duration::from_secs(600);
+
+/// The repository's root.
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// Runs `plugins new NAME` into `target/plugin-tests/crates/NAME` (emptied first: a fixed
+/// place, so each run rebuilds the same package instead of adding another to the target
+/// directory) and gives the crate the workspace's lock file, so an offline build uses the
+/// versions already downloaded.
+fn new_plugin(name: &str) -> PathBuf {
+    let krate = plugin_target_dir().join("crates").join(name);
+    match std::fs::remove_dir_all(&krate) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => panic!("{}: {e}", krate.display()),
+        _ => {}
+    }
+    let out = flarebench(&["plugins", "new", name, "--path", krate.to_str().unwrap()]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("cargo build --manifest-path"), "{text}");
+    assert!(text.contains("--watch"), "{text}");
+    // Inside this workspace (the target directory usually is), the note says what to add to
+    // its members.
+    let (krate_abs, root_abs) = (
+        krate.canonicalize().unwrap(),
+        root().canonicalize().unwrap(),
+    );
+    if let Ok(member) = krate_abs.strip_prefix(&root_abs) {
+        let add = format!("add \"{}\" to `members`", member.display());
+        assert!(text.contains(&add), "{text}");
+    }
+    std::fs::copy(root().join("Cargo.lock"), krate.join("Cargo.lock")).unwrap();
+    krate
+}
+
+/// The target directory the new crates are built into.
+fn plugin_target_dir() -> PathBuf {
+    build_dir()
+        .parent()
+        .expect("the build directory is inside the target directory")
+        .join("plugin-tests")
+}
+
+/// Builds the crate at `krate` with cargo and returns its library.
+fn cargo_build(krate: &Path, lib_name: &str) -> PathBuf {
+    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+    let out = Command::new(cargo)
+        .args(["build", "--offline", "--quiet", "--manifest-path"])
+        .arg(krate.join("Cargo.toml"))
+        .env("CARGO_TARGET_DIR", plugin_target_dir())
+        .output()
+        .expect("cargo runs");
+    assert!(
+        out.status.success(),
+        "cargo build of {}:\n{}",
+        krate.display(),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let lib = plugin_target_dir()
+        .join("debug")
+        .join(library_file_name(lib_name));
+    assert!(lib.is_file(), "{} was not built", lib.display());
+    lib
+}
+
+#[test]
+fn plugins_new_writes_a_crate_that_builds_loads_and_draws_what_the_example_draws() {
+    let krate = new_plugin("new-glow");
+    let lib = cargo_build(&krate, "new_glow");
+
+    // Listed under its own name, with the example's parameters.
+    let v = json(&[
+        "plugins",
+        "list",
+        "--json",
+        "--plugin",
+        lib.to_str().unwrap(),
+    ]);
+    let entry = v["plugins"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|p| p["path"] == lib.to_str().unwrap())
+        .expect("the new library is listed");
+    assert_eq!(entry["status"], "ok", "{entry}");
+    assert_eq!(entry["name"], "new-glow");
+    let params: Vec<&str> = entry["params"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(params, ["sigma_px", "gain"]);
+
+    // The same image as the example's library, bit for bit.
+    let lens = load_lens("heliar-tronnier");
+    let scene = Scene {
+        lights: vec![SceneLight {
+            theta_deg: 4.0,
+            phi_deg: 60.0,
+            intensity: 2.0,
+            spectrum: LightSpectrum::D65,
+        }],
+        frame: Frame {
+            width: 160,
+            height: 90,
+            film_width_mm: 36.0,
+            film_height_mm: 20.25,
+        },
+        aperture: Aperture::Circular,
+    };
+    let render = |path: &Path| {
+        let p = host::load(path).unwrap();
+        let values = parse_values(&p.params, "sigma_px=5,gain=3").unwrap();
+        let mut inst = p.instantiate().unwrap();
+        inst.prepare(&lens).unwrap();
+        inst.render(&scene, &values).unwrap().image
+    };
+    let mine = render(&lib);
+    let example = render(&plugin_library("example_glow"));
+    let energy: f64 = mine.pixels.iter().map(|p| p[0] as f64).sum();
+    assert!(energy > 1.0, "the glow drew {energy}");
+    assert!(mine.pixels == example.pixels, "the images differ");
+
+    // Refusals: the directory is now taken, and a name cannot name a crate.
+    let out = flarebench(&[
+        "plugins",
+        "new",
+        "new-glow",
+        "--path",
+        krate.to_str().unwrap(),
+    ]);
+    assert!(!out.status.success());
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("already exists and is not empty"),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let out = flarebench(&["plugins", "new", "2fast", "--path", "unused"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("must start with a letter"), "{err}");
+    assert!(!Path::new("unused").exists());
+}
+
+/// The watcher as a child process, its stdout read line by line on a thread; killed when
+/// dropped (a failing test leaves nothing running).
+struct Watcher {
+    child: Child,
+    lines: mpsc::Receiver<String>,
+    stderr: PathBuf,
+}
+
+impl Watcher {
+    fn start(args: &[&str], stderr: PathBuf) -> Watcher {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_flarebench"))
+            .args(args)
+            .stdout(Stdio::piped())
+            .stderr(std::fs::File::create(&stderr).unwrap())
+            .spawn()
+            .unwrap();
+        let stdout = child.stdout.take().unwrap();
+        let (tx, lines) = mpsc::channel();
+        std::thread::spawn(move || {
+            for line in std::io::BufReader::new(stdout).lines() {
+                let Ok(line) = line else { break };
+                if tx.send(line).is_err() {
+                    break;
+                }
+            }
+        });
+        Watcher {
+            child,
+            lines,
+            stderr,
+        }
+    }
+
+    /// The next event the watcher printed (one JSON object per line), or `None` at its end.
+    fn next(&self) -> Option<Value> {
+        match self.lines.recv_timeout(LINE_WAIT) {
+            Ok(line) => Some(
+                serde_json::from_str(&line)
+                    .unwrap_or_else(|e| panic!("not a JSON line ({e}): {line}")),
+            ),
+            Err(mpsc::RecvTimeoutError::Disconnected) => None,
+            Err(mpsc::RecvTimeoutError::Timeout) => panic!(
+                "no line from compare --watch in {LINE_WAIT:?}; its stderr:\n{}",
+                std::fs::read_to_string(&self.stderr).unwrap_or_default()
+            ),
+        }
+    }
+
+    /// The next event, which must be of kind `event`.
+    fn expect(&self, event: &str) -> Value {
+        let v = self.next().unwrap_or_else(|| {
+            panic!(
+                "compare --watch ended before `{event}`; its stderr:\n{}",
+                std::fs::read_to_string(&self.stderr).unwrap_or_default()
+            )
+        });
+        assert_eq!(v["event"], event, "{v}");
+        v
+    }
+}
+
+impl Drop for Watcher {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// The value `compare` printed for parameter `name` of its only algorithm.
+fn param(report: &Value, name: &str) -> String {
+    report["algorithms"][0]["params"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|p| p[0] == name)
+        .map(|p| p[1].as_str().unwrap().to_string())
+        .unwrap_or_else(|| panic!("no parameter {name} in {report}"))
+}
+
+/// The algorithm's energy relative to the reference's (1 + the energy error).
+fn relative_energy(report: &Value) -> f64 {
+    let a = &report["algorithms"][0];
+    assert!(a["failure"].is_null(), "{a}");
+    1.0 + a["error"]["energy_error"].as_f64().unwrap()
+}
+
+#[test]
+fn compare_watch_reloads_a_rebuilt_plugin_and_keeps_it_when_a_broken_library_follows() {
+    let tmp = temp_dir("plugin-watch");
+    let krate = new_plugin("loop-glow");
+    let lib = cargo_build(&krate, "loop_glow");
+    let lens = tmp.path().join("lens.xml");
+    std::fs::copy(root().join("lenses/heliar-tronnier.xml"), &lens).unwrap();
+    let out = tmp.path().join("cmp.png");
+    let w = Watcher::start(
+        &[
+            "compare",
+            lens.to_str().unwrap(),
+            "--light",
+            "3,0",
+            "--algo",
+            lib.to_str().unwrap(),
+            "--size",
+            "64x36",
+            "--runs",
+            "1",
+            "--backend",
+            "cpu",
+            // The reference is rendered once: the lens reload below reads it back (the
+            // lens is the same system).
+            "--reference-file",
+            tmp.path().join("reference.exr").to_str().unwrap(),
+            "--json",
+            "--watch",
+            "--watch-events",
+            "3",
+            "-o",
+            out.to_str().unwrap(),
+        ],
+        tmp.path().join("watch.stderr"),
+    );
+    let first = w.expect("compared");
+    assert_eq!(param(&first, "gain"), "1");
+    let e1 = relative_energy(&first);
+    assert!(out.is_file());
+
+    // Change the gain's default from 1 to 2.5 and rebuild.
+    let src = krate.join("src/lib.rs");
+    let code = std::fs::read_to_string(&src).unwrap();
+    let old = "1e6,\n                    1.0,\n";
+    assert_eq!(code.matches(old).count(), 1, "the gain's default in {code}");
+    std::fs::write(&src, code.replace(old, "1e6,\n                    2.5,\n")).unwrap();
+    cargo_build(&krate, "loop_glow");
+
+    let reloaded = w.expect("reloaded");
+    assert_eq!(reloaded["what"], "plugin");
+    assert_eq!(reloaded["name"], "loop-glow");
+    assert_eq!(reloaded["defaults"][1], serde_json::json!(["gain", "2.5"]));
+    let second = w.expect("compared");
+    assert_eq!(param(&second, "gain"), "2.5");
+    let e2 = relative_energy(&second);
+    assert!(
+        (e2 / e1 / 2.5 - 1.0).abs() < GAIN_RATIO_TOL,
+        "energy {e1} → {e2}: not 2.5 times"
+    );
+
+    // A broken library (put in place as cargo does, by replacing the file: cargo's library
+    // beside the build is a hard link to the one in `deps/`, which a write in place would
+    // corrupt for the next build): the error is shown and the rebuilt plugin stays in use.
+    let broken = lib.with_extension("broken");
+    std::fs::write(&broken, b"not a shared library").unwrap();
+    std::fs::rename(&broken, &lib).unwrap();
+    let failed = w.expect("reload_failed");
+    assert_eq!(failed["what"], "plugin");
+    let error = failed["error"].as_str().unwrap();
+    assert!(
+        error.contains(lib.to_str().unwrap()) && error.contains("could not load the library"),
+        "{error}"
+    );
+    // The lens file saved again (one more blank line): compared again, with the plugin of the
+    // last good load.
+    let mut text = std::fs::read_to_string(&lens).unwrap();
+    text.push('\n');
+    std::fs::write(&lens, text).unwrap();
+    assert_eq!(w.expect("reloaded")["what"], "lens");
+    let third = w.expect("compared");
+    assert_eq!(param(&third, "gain"), "2.5");
+    assert!((relative_energy(&third) / e2 - 1.0).abs() < GAIN_RATIO_TOL);
+    // Three changes, so the watcher ends by itself.
+    assert!(w.next().is_none(), "nothing after the third change");
+}
