@@ -10,7 +10,10 @@ use serde::{Deserialize, Serialize};
 
 use crate::basis::{Monomial, Powers, monomials};
 use crate::omp::pursue;
-use crate::sample::{Domain, OUTPUTS, Sample, THROUGHPUT, trace_samples, x_odd};
+use crate::sample::{
+    Domain, MAX_REL, OUTPUTS, SENSOR_X, SENSOR_Y, STOP_U, STOP_V, Sample, THROUGHPUT,
+    trace_samples, x_odd,
+};
 
 /// What a fit is made with: the plugin's parameters.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -69,6 +72,14 @@ pub struct GhostFit {
     pub samples: usize,
 }
 
+/// The sensor position and throughput are fitted on the rays that pass within this margin of
+/// every rim (`max_rel`) and of the stop's working radius: the rays drawn, and a band around
+/// them for the triangles the clip cuts. The rays far outside (which still complete, through
+/// the surfaces' mathematical extension beyond their rims) would otherwise pull the fit away
+/// from where it is drawn. The clip functions (stop crossing, `max_rel`) are fitted on every
+/// ray, so that they cross their thresholds where the tracer's do.
+pub const NEAR: f64 = 1.2;
+
 /// Fewest completed rays a fit is made from (below, the ghost has next to no light).
 pub const MIN_SAMPLES: usize = 64;
 
@@ -118,14 +129,44 @@ impl GhostFit {
         };
         let (odd_ms, odd_cols) = columns(true);
         let (even_ms, even_cols) = columns(false);
+        let near: Vec<bool> = samples
+            .iter()
+            .map(|s| {
+                s.outputs[MAX_REL] <= NEAR && s.outputs[STOP_U].hypot(s.outputs[STOP_V]) <= NEAR
+            })
+            .collect();
+        let use_near = near.iter().filter(|&&n| n).count() >= MIN_SAMPLES;
+        let keep = |cols: &[Vec<f64>]| -> Vec<Vec<f64>> {
+            cols.iter()
+                .map(|c| {
+                    c.iter()
+                        .zip(&near)
+                        .filter(|(_, n)| **n)
+                        .map(|(v, _)| *v)
+                        .collect()
+                })
+                .collect()
+        };
+        let (odd_near, even_near) = if use_near {
+            (keep(&odd_cols), keep(&even_cols))
+        } else {
+            (odd_cols.clone(), even_cols.clone())
+        };
         let outputs = (0..OUTPUTS)
             .map(|o| {
-                let (ms, cols) = if x_odd(o) {
-                    (&odd_ms, &odd_cols)
-                } else {
-                    (&even_ms, &even_cols)
+                let drawn = matches!(o, SENSOR_X | SENSOR_Y | THROUGHPUT);
+                let (ms, cols) = match (x_odd(o), drawn) {
+                    (true, false) => (&odd_ms, &odd_cols),
+                    (false, false) => (&even_ms, &even_cols),
+                    (true, true) => (&odd_ms, &odd_near),
+                    (false, true) => (&even_ms, &even_near),
                 };
-                let y: Vec<f64> = samples.iter().map(|s| s.outputs[o]).collect();
+                let y: Vec<f64> = samples
+                    .iter()
+                    .zip(&near)
+                    .filter(|(_, n)| !drawn || !use_near || **n)
+                    .map(|(s, _)| s.outputs[o])
+                    .collect();
                 let p = pursue(cols, &y, settings.terms, TOLERANCE);
                 OutputPoly {
                     terms: p

@@ -8,11 +8,11 @@ use ghost_polynomial::fit::FitSettings;
 use ghost_polynomial::model::LensModel;
 
 /// Largest RMS and 99th-percentile sensor-position error of any Heliar ghost (µm) at the
-/// default settings (degree 5, 40 terms, 4096 rays). Measured 2026-12-05: worst RMS 296 µm
-/// (ghost 8-7), worst p99 785 µm (ghost 4-0), median RMS about 20 µm; the bounds leave about
-/// 50% margin for other seeds.
-const MAX_RMS_UM: f64 = 450.0;
-const MAX_P99_UM: f64 = 1200.0;
+/// default settings (degree 5, 40 terms, 4096 rays). Measured 2026-12-05: worst RMS 121 µm
+/// (ghost 8-4), worst p99 428 µm, median RMS 14 µm; the bounds leave about 50% margin for
+/// other seeds.
+const MAX_RMS_UM: f64 = 180.0;
+const MAX_P99_UM: f64 = 650.0;
 
 #[test]
 fn every_heliar_ghost_fit_lands_within_the_stated_error() {
