@@ -39,8 +39,8 @@ impl Default for FitSettings {
 }
 
 /// The parameters' defaults (chosen by measurement, docs/plugins.md §8).
-pub const DEFAULT_DEGREE: usize = 5;
-pub const DEFAULT_TERMS: usize = 40;
+pub const DEFAULT_DEGREE: usize = 7;
+pub const DEFAULT_TERMS: usize = 60;
 pub const DEFAULT_SAMPLES: usize = 4096;
 
 /// The pursuit stops when an output's residual RMS is this small: 0.1 nm for positions

@@ -16,12 +16,12 @@ use ghost_polynomial::sample::{
 };
 
 /// The plate's ghost position error against its closed form (mm). The shift
-/// `3 · 3 mm · tan θ_t` is not polynomial in θ; measured 2026-12-05 at degree 5, 40 terms,
-/// 2048 rays over 0–30°: largest error 0.05 µm. The bound leaves a factor of 20.
+/// `3 · 3 mm · tan θ_t` is not polynomial in θ; measured 2026-12-05 at degree 7, 60 terms,
+/// 2048 rays over 0–30°: largest error 0.06 µm. The bound leaves a factor of 15.
 const PLATE_MAX_ERROR_MM: f64 = 1e-3;
 /// The plate ghost's throughput against `t_in · r² · t_out` (absolute): the sdk's interface
 /// tables interpolate Fresnel over the cosine (their own error, about 1e-6 of the
-/// transmittance), the fit adds less. Measured 2026-12-05: largest 6e-8 of a throughput of
+/// transmittance), the fit adds less. Measured 2026-12-05: largest 7e-8 of a throughput of
 /// about 1.7e-3.
 const PLATE_MAX_THROUGHPUT_ERROR: f64 = 2e-5;
 
@@ -123,8 +123,8 @@ fn sphere_closed_form(x: f64, y: f64, theta: f64, r: f64, z_s: f64) -> [f64; 2] 
 }
 
 /// One sphere's position error against the closed form (mm): the map is smooth but not
-/// polynomial; measured 2026-12-05 at degree 5, 40 terms, 2048 rays over 0–20° and the 2 mm
-/// stop: largest error 0.06 µm. The bound leaves a factor of about 20.
+/// polynomial; measured 2026-12-05 at degree 7, 60 terms, 2048 rays over 0–20° and the 2 mm
+/// stop: largest error 0.11 µm. The bound leaves a factor of about 9.
 const SPHERE_MAX_ERROR_MM: f64 = 1e-3;
 
 #[test]
