@@ -57,8 +57,9 @@ pub const REFERENCE_GRID_SCALE: f64 = 10.0;
 /// pupil — ghosts the reference had cut or missed. 5: Fresnel tables of light leaving the
 /// denser medium tabulated in the refracted cosine (`trace::InterfaceTable`: exact near the
 /// critical angle), grids refined where the throughput changes fast
-/// (`bounds::grid_for_spread`), small pupils found (`bounds::direct_flux`).
-pub const REFERENCE_VERSION: u32 = 5;
+/// (`bounds::grid_for_spread`), small pupils found (`bounds::direct_flux`). 6: grids refined
+/// for ghosts whose edge cells carry much of their light (`bounds::grid_for_edges`).
+pub const REFERENCE_VERSION: u32 = 6;
 
 /// A text naming everything the reference image depends on: the renderer's version and
 /// settings, the reflection order, the lens (fingerprint of its canonical XML), the aperture, the frame and every
