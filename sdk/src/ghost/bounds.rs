@@ -440,11 +440,20 @@ pub fn precise_from(
     let sensor = Rect::bounding(passing.iter().map(|&k| g.sensor[k].map(f64::from)))?;
     let mean_intensity =
         passing.iter().map(|&k| g.weight[k] as f64).sum::<f64>() / passing.len() as f64;
-    let flux = clipped_flux(g, theta);
+    let grid = grid_for_spread(g);
+    // A thin ring or crescent (`grid_for_edges`): its flux measured again on the finer grid
+    // it is drawn at, where the refine grid's edge cells misplace a few per cent of it.
+    let by_edges = grid_for_edges(g).min(MAX_GRID);
+    let flux = if by_edges > REFINE_GRID {
+        trace_grid(seq, theta, rect, by_edges, stop, scratch);
+        clipped_flux(scratch, theta)
+    } else {
+        clipped_flux(g, theta)
+    };
     Some(GhostBounds {
         entrance: found.expand(cx, cy),
         sensor,
-        grid: grid_for_spread(g),
+        grid,
         mean_intensity,
         energy_share: if reference > 0.0 {
             flux / reference
