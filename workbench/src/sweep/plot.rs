@@ -202,12 +202,85 @@ fn draw<DB: DrawingBackend>(
                 + Text::new(short, (7, -14), (FONT, 12).into_font().color(&colour))
         }))?;
     }
+    let placed: Vec<(f64, f64)> = ok
+        .iter()
+        .map(|&i| {
+            let (x, y) = (cells[i].median_ms, err_pct(cells[i].relative_rmse));
+            (
+                (x / x0).log10() / (x1 / x0).log10(),
+                (y / y0).log10() / (y1 / y0).log10(),
+            )
+        })
+        .collect();
     chart
         .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
+        .position(legend_corner(&placed))
         .background_style(WHITE.mix(0.85))
         .border_style(RGBColor(180, 180, 180))
         .label_font((FONT, 13))
         .draw()?;
     Ok(())
+}
+
+/// The share of the plot's width and height the legend box may cover from its corner.
+const LEGEND_REACH: (f64, f64) = (0.45, 0.4);
+
+/// The corner of the plot for the legend: the one that covers the fewest points (`points` in
+/// the plot's unit square, x right and y up). Ties go, in turn, to the upper right (slow and
+/// wrong: rarely anything there), the lower left, the upper left and the lower right.
+fn legend_corner(points: &[(f64, f64)]) -> SeriesLabelPosition {
+    let (w, h) = LEGEND_REACH;
+    // Each corner with its box: x range, then y range.
+    let corners = [
+        (
+            SeriesLabelPosition::UpperRight,
+            (1.0 - w, 1.0),
+            (1.0 - h, 1.0),
+        ),
+        (SeriesLabelPosition::LowerLeft, (0.0, w), (0.0, h)),
+        (SeriesLabelPosition::UpperLeft, (0.0, w), (1.0 - h, 1.0)),
+        (SeriesLabelPosition::LowerRight, (1.0 - w, 1.0), (0.0, h)),
+    ];
+    let covered = |(xr, yr): ((f64, f64), (f64, f64))| {
+        points
+            .iter()
+            .filter(|(x, y)| (xr.0..=xr.1).contains(x) && (yr.0..=yr.1).contains(y))
+            .count()
+    };
+    let mut best = (usize::MAX, SeriesLabelPosition::UpperRight);
+    for (pos, xr, yr) in corners {
+        let n = covered((xr, yr));
+        if n < best.0 {
+            best = (n, pos);
+        }
+    }
+    best.1
+}
+
+#[cfg(test)]
+mod legend_tests {
+    use super::*;
+
+    fn corner(points: &[(f64, f64)]) -> &'static str {
+        match legend_corner(points) {
+            SeriesLabelPosition::UpperRight => "upper right",
+            SeriesLabelPosition::LowerLeft => "lower left",
+            SeriesLabelPosition::UpperLeft => "upper left",
+            SeriesLabelPosition::LowerRight => "lower right",
+            _ => "elsewhere",
+        }
+    }
+
+    #[test]
+    fn the_legend_goes_to_the_corner_with_the_fewest_points() {
+        assert_eq!(corner(&[]), "upper right");
+        // A slow, noisy series in the upper right (the sweep's splat points).
+        let slow = [(0.8, 0.9), (0.9, 0.8), (0.95, 0.7), (0.1, 0.5)];
+        assert_eq!(corner(&slow), "lower left");
+        // Points in every corner but the upper left.
+        let three = [(0.9, 0.9), (0.1, 0.1), (0.9, 0.1), (0.5, 0.5)];
+        assert_eq!(corner(&three), "upper left");
+        let all = [(0.9, 0.9), (0.1, 0.1), (0.1, 0.9), (0.9, 0.1)];
+        assert_eq!(corner(&all), "upper right");
+    }
 }
