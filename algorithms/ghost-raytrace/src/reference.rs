@@ -58,8 +58,10 @@ pub const REFERENCE_GRID_SCALE: f64 = 10.0;
 /// denser medium tabulated in the refracted cosine (`trace::InterfaceTable`: exact near the
 /// critical angle), grids refined where the throughput changes fast
 /// (`bounds::grid_for_spread`), small pupils found (`bounds::direct_flux`). 6: grids refined
-/// for ghosts whose edge cells carry much of their light (`bounds::grid_for_edges`).
-pub const REFERENCE_VERSION: u32 = 6;
+/// for ghosts whose edge cells carry much of their light (`bounds::grid_for_edges`). 7: ghosts
+/// whose search rays all stop found from their paraxial entrance rectangle, and smaller entry
+/// regions zoomed into (`bounds::paraxial_seed`, `zoom`).
+pub const REFERENCE_VERSION: u32 = 7;
 
 /// A text naming everything the reference image depends on: the renderer's version and
 /// settings, the reflection order, the lens (fingerprint of its canonical XML), the aperture, the frame and every
