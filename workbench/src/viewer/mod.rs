@@ -32,4 +32,6 @@ pub mod plugins;
 pub mod status;
 pub mod window;
 
+/// The starburst mode of [`ViewerOptions`] (`render --starburst`).
+pub use crate::cli::render::StarburstMode;
 pub use app::{EditorLink, Viewer, ViewerOptions};
