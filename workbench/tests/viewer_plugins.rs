@@ -73,6 +73,16 @@ fn key(k: egui::Key) -> Vec<Event> {
 /// What `compare` renders with the library at `path` (default parameters) on the CPU backend,
 /// for the viewer's scene: `GhostBackend::render_plugin`, as `compare` calls it.
 fn compare_render(path: &Path, lens: &LensSystem, light: &LightSpec) -> HdrImage {
+    compare_render_on(BackendChoice::Cpu, path, lens, light)
+}
+
+/// [`compare_render`] on `backend`.
+fn compare_render_on(
+    backend: BackendChoice,
+    path: &Path,
+    lens: &LensSystem,
+    light: &LightSpec,
+) -> HdrImage {
     let plugin = host::load(path).unwrap();
     let values = parse_values(&plugin.params, "").unwrap();
     let mut inst = plugin.instantiate().unwrap();
@@ -82,7 +92,7 @@ fn compare_render(path: &Path, lens: &LensSystem, light: &LightSpec) -> HdrImage
         frame: view_frame(lens, SIZE.0, SIZE.1),
         aperture: Aperture::Circular,
     };
-    let mut backend = GhostBackend::open(BackendChoice::Cpu).unwrap();
+    let mut backend = GhostBackend::open(backend).unwrap();
     let mut image = HdrImage::new(0, 0);
     backend
         .render_plugin(&mut inst, &scene, &values, &mut image)
@@ -93,6 +103,11 @@ fn compare_render(path: &Path, lens: &LensSystem, light: &LightSpec) -> HdrImage
 /// The viewer with the plugin library at `path` (given by path, as `view --algo PATH`), linked
 /// to a pretend editor whose notes come back on the receiver.
 fn viewer_with(path: &Path) -> (Viewer, Receiver<ToEditor>) {
+    viewer_on(options(), &[path])
+}
+
+/// [`viewer_with`] with `options` and several plugins.
+fn viewer_on(options: ViewerOptions, paths: &[&Path]) -> (Viewer, Receiver<ToEditor>) {
     let (change_tx, changes) = channel();
     drop(change_tx);
     let (_sel_tx, selection) = channel::<FromEditor>();
@@ -102,10 +117,13 @@ fn viewer_with(path: &Path) -> (Viewer, Receiver<ToEditor>) {
         selection,
         to_editor,
     };
-    let algo = Algo::resolve(path.to_str().unwrap(), &[], true);
-    let viewer = Viewer::new(load_lens("heliar-tronnier"), options(), Box::new(|| {}))
+    let algos = paths
+        .iter()
+        .map(|p| Algo::resolve(p.to_str().unwrap(), &[], true))
+        .collect();
+    let viewer = Viewer::new(load_lens("heliar-tronnier"), options, Box::new(|| {}))
         .with_link(link)
-        .with_algos(vec![algo])
+        .with_algos(algos)
         .unwrap();
     (viewer, from_window)
 }
@@ -264,4 +282,73 @@ fn a_rewritten_plugin_library_is_reloaded_and_a_broken_one_keeps_the_previous_wi
     assert!(third.hdr.pixels != second.hdr.pixels, "the light moved");
     let want = compare_render(&glow, viewer.system(), &viewer.scene().lights[0]);
     assert!(third.hdr.pixels == want.pixels);
+}
+
+/// The GPU against the CPU for a plugin's mesh, relative RMSE and energy: what
+/// `plugins.rs`'s `compare_draws_plugin_meshes_on_the_gpu_and_reports_the_backend` allows (the
+/// two rasterizers' exact coverage differ in rounding along edges).
+const GPU_CPU_MAX_RMSE: f64 = 0.005;
+const GPU_CPU_MAX_ENERGY: f64 = 0.001;
+
+#[test]
+fn on_the_gpu_a_plugins_preview_is_compares_gpu_image_its_own_pixels_kept() {
+    let matrix = plugin_library("ghost_matrix");
+    let glow = plugin_library("example_glow");
+    let (mut viewer, _notes) = viewer_on(
+        ViewerOptions {
+            backend: BackendChoice::Gpu,
+            // Near the axis: the starburst lands in the frame.
+            lights: vec![LightSpec::parse("3,40").unwrap()],
+            ..options()
+        },
+        &[&matrix, &glow],
+    );
+    let mut target = Offscreen::new(WINDOW.0, WINDOW.1).unwrap();
+    // The first plugin (a mesh), then `A` to the second (pixels of its own).
+    for (k, lib) in [&matrix, &glow].into_iter().enumerate() {
+        if k > 0 {
+            target.pass(&mut viewer, key(egui::Key::A));
+        }
+        settled(&mut viewer, &mut target);
+        let f = viewer.frame_shown().unwrap().clone();
+        assert_eq!(f.backend.backend, "gpu", "{:?}", f.backend);
+        assert_eq!(
+            viewer.active_algo().unwrap().spec,
+            lib.to_str().unwrap(),
+            "A goes to the next plugin"
+        );
+        let light = viewer.scene().lights[0].clone();
+        let gpu = compare_render_on(BackendChoice::Gpu, lib, viewer.system(), &light);
+        let cpu = compare_render(lib, viewer.system(), &light);
+        assert!(
+            f.hdr.pixels == gpu.pixels,
+            "{}: not compare's GPU image",
+            lib.display()
+        );
+        let c = f.hdr.compare(&cpu).unwrap();
+        assert!(
+            c.relative_rmse <= GPU_CPU_MAX_RMSE && c.energy_error.abs() <= GPU_CPU_MAX_ENERGY,
+            "{}: against the CPU {c:?}",
+            lib.display()
+        );
+    }
+    // With the starburst (S: off → only → on) added to the glow's frame, the glow is still
+    // there: the starburst only adds light.
+    let glow_only = viewer.frame_shown().unwrap().hdr.clone();
+    target.pass(&mut viewer, key(egui::Key::S));
+    target.pass(&mut viewer, key(egui::Key::S));
+    assert_eq!(viewer.scene().starburst, StarburstMode::On);
+    settled(&mut viewer, &mut target);
+    let with_starburst = &viewer.frame_shown().unwrap().hdr;
+    let lost = with_starburst
+        .pixels
+        .iter()
+        .zip(&glow_only.pixels)
+        .filter(|(p, q)| (0..3).any(|c| p[c] < q[c] * (1.0 - 1e-5)))
+        .count();
+    assert_eq!(
+        lost, 0,
+        "pixels of the plugin's own lost under the starburst"
+    );
+    assert!(with_starburst.sum()[1] > glow_only.sum()[1]);
 }
