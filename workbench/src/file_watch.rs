@@ -1,5 +1,5 @@
 //! Noticing that a file was rewritten — a plugin library rebuilt by cargo, a lens file saved —
-//! by polling its metadata (`compare --watch`).
+//! by polling its metadata (`compare --watch`, the window's `--algo` plugins).
 //!
 //! Polling rather than the system's file events (inotify and its kin, through the `notify`
 //! crate): the files watched are a handful, so a `stat` of each every [`POLL_INTERVAL`] costs

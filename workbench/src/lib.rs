@@ -2,6 +2,7 @@
 //!
 //! The optics live in `flarebench-sdk`; this crate turns them into commands.
 
+pub mod algo_spec;
 pub mod aperture_file;
 pub mod backend;
 pub mod cli;

@@ -1,7 +1,8 @@
 //! The plugin author's loop end to end: `plugins new` writes a crate that cargo builds and the
 //! workbench loads, drawing what the guide's example draws; `compare --watch` reloads it when it
 //! is rebuilt with another default, keeps the previous one when the library is broken, and
-//! compares again when the lens file changes.
+//! compares again when the lens file changes; the viewer window (`view --algo`) reloads a
+//! rebuilt plugin and renders with its new default.
 //!
 //! The new crates are built with cargo (offline, with the workspace's `Cargo.lock`) into
 //! `target/plugin-tests/`, which persists between runs: the first run compiles the sdk and its
@@ -354,4 +355,102 @@ fn compare_watch_reloads_a_rebuilt_plugin_and_keeps_it_when_a_broken_library_fol
     assert!((relative_energy(&third) / e2 - 1.0).abs() < GAIN_RATIO_TOL);
     // Three changes, so the watcher ends by itself.
     assert!(w.next().is_none(), "nothing after the third change");
+}
+
+/// A pass of the viewer's UI with no display and no painting (the viewer's state is all the
+/// test reads): a bare egui context.
+#[cfg(feature = "window")]
+fn viewer_pass(ctx: &egui::Context, viewer: &mut flarebench::viewer::Viewer) {
+    let input = egui::RawInput {
+        screen_rect: Some(egui::Rect::from_min_size(
+            egui::Pos2::ZERO,
+            egui::vec2(1200.0, 640.0),
+        )),
+        ..egui::RawInput::default()
+    };
+    let mut out = ctx.run_ui(input, |ui| viewer.frame(ui));
+    // Nothing paints: the textures it uploads are dropped.
+    out.textures_delta.clear();
+}
+
+/// Passes until `done` holds, waiting for the render thread between them, or panics.
+#[cfg(feature = "window")]
+fn viewer_until(
+    ctx: &egui::Context,
+    viewer: &mut flarebench::viewer::Viewer,
+    what: &str,
+    done: impl Fn(&flarebench::viewer::Viewer) -> bool,
+) {
+    let end = std::time::Instant::now() + LINE_WAIT;
+    viewer_pass(ctx, viewer);
+    while !done(viewer) {
+        assert!(
+            viewer.render_failure().is_none(),
+            "{:?}",
+            viewer.render_failure()
+        );
+        assert!(
+            std::time::Instant::now() < end,
+            "no {what} in {LINE_WAIT:?}; status: {:?}",
+            viewer.message()
+        );
+        viewer.wait_for_render(Duration::from_millis(50));
+        viewer_pass(ctx, viewer);
+    }
+}
+
+#[cfg(feature = "window")]
+#[test]
+fn the_window_reloads_a_rebuilt_plugin_and_renders_with_its_new_default() {
+    use flarebench::algo_spec::Algo;
+    use flarebench::backend::BackendChoice;
+    use flarebench::viewer::{StarburstMode, Viewer, ViewerOptions};
+    use ghost_raytrace::scene::{LightSpec, Quality};
+
+    let krate = new_plugin("window-glow");
+    let lib = cargo_build(&krate, "window_glow");
+    let options = ViewerOptions {
+        backend: BackendChoice::Cpu,
+        size: (64, 36),
+        lights: vec![LightSpec::parse("3,0").unwrap()],
+        quality: Quality::Fast,
+        starburst: StarburstMode::Off,
+        ..ViewerOptions::default()
+    };
+    let algo = Algo::resolve(lib.to_str().unwrap(), &[], true);
+    let mut viewer = Viewer::new(load_lens("heliar-tronnier"), options, Box::new(|| {}))
+        .with_algos(vec![algo])
+        .unwrap();
+    let ctx = egui::Context::default();
+    viewer_until(&ctx, &mut viewer, "first frame", Viewer::settled);
+    let energy = |v: &Viewer| v.frame_shown().unwrap().hdr.sum().iter().sum::<f64>();
+    let e1 = energy(&viewer);
+    assert!(e1 > 0.0, "the glow drew nothing");
+    assert_eq!(
+        viewer.frame_shown().unwrap().plugin.as_ref().unwrap().name,
+        "window-glow"
+    );
+
+    // The gain's default from 1 to 2.5, rebuilt by cargo while the viewer runs.
+    let src = krate.join("src/lib.rs");
+    let code = std::fs::read_to_string(&src).unwrap();
+    let old = "1e6,\n                    1.0,\n";
+    assert_eq!(code.matches(old).count(), 1, "the gain's default in {code}");
+    std::fs::write(&src, code.replace(old, "1e6,\n                    2.5,\n")).unwrap();
+    cargo_build(&krate, "window_glow");
+    let built = std::time::Instant::now();
+    viewer_until(&ctx, &mut viewer, "reload", |v| v.algos()[0].reloads == 1);
+    viewer_until(&ctx, &mut viewer, "frame after the reload", Viewer::settled);
+    eprintln!(
+        "cargo build returned → the new frame: {:.0} ms ({})",
+        built.elapsed().as_secs_f64() * 1e3,
+        viewer.message().unwrap_or_default()
+    );
+    let f = viewer.frame_shown().unwrap();
+    assert_eq!(f.plugin.as_ref().unwrap().reloads, 1);
+    let e2 = energy(&viewer);
+    assert!(
+        (e2 / e1 / 2.5 - 1.0).abs() < GAIN_RATIO_TOL,
+        "energy {e1} → {e2}: not 2.5 times"
+    );
 }

@@ -189,6 +189,39 @@ fn compare_refuses_an_unknown_plugin_or_parameter_clearly() {
     assert_eq!(out.status.code(), Some(1));
 }
 
+/// `view --algo` resolves its spec as `compare` does, and refuses an unknown plugin or
+/// parameter before anything is drawn (no display or adapter needed).
+#[cfg(feature = "window")]
+#[test]
+fn view_refuses_an_unknown_plugin_or_parameter_clearly() {
+    let tmp = temp_dir("view-bad");
+    let shot = tmp.path().join("x.png");
+    let view = |algo: &str| {
+        let out = flarebench(&[
+            "view",
+            "heliar-tronnier",
+            "--algo",
+            algo,
+            "--screenshot",
+            shot.to_str().unwrap(),
+        ]);
+        assert!(!out.status.success());
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let err = view("no-such-plugin");
+    assert!(
+        err.contains("--algo no-such-plugin: no plugin named `no-such-plugin`"),
+        "{err}"
+    );
+    let err = view("example-glow:sigma_px=0");
+    assert!(
+        err.contains("--algo example-glow:sigma_px=0")
+            && err.contains("parameter `sigma_px`: `0` is not float in 0.5..=500"),
+        "{err}"
+    );
+    assert!(!shot.exists());
+}
+
 /// The starburst plugin and `compose::add_starbursts` (what `render` adds) run the same sdk
 /// calls in the same order: measured identical images (relative RMSE 0). 1e-6 leaves room for
 /// a change of summation order, not for another landing point (a tenth of a pixel off measures

@@ -17,12 +17,12 @@ use ghost_raytrace::scene::LightSpec;
 use serde::Serialize;
 
 use super::render::{IrisArgs, auto_exposure, parse_size};
+pub(crate) use crate::algo_spec::Algo;
 use crate::backend::{BackendChoice, BackendReport, GhostBackend};
 use crate::file_watch::WatchedFile;
 use crate::label;
 use crate::lens_library;
 use crate::output::{ToneMap, ToneOperator, save_image};
-use crate::plugin_dirs;
 use crate::reference_file::{ReferenceSource, reference_for};
 use crate::report::ErrorReport;
 use crate::stats::median;
@@ -140,53 +140,6 @@ fn peak_rss_mib() -> Option<f64> {
     let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
     let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kib / 1024.0)
-}
-
-/// An `--algo` argument and the plugin it names.
-#[derive(Debug)]
-pub(crate) struct Algo {
-    /// As given to `--algo`.
-    pub spec: String,
-    /// The plugin in use (loaded at the start or by the last good reload), or why none is.
-    pub plugin: Result<LoadedPlugin, String>,
-    /// The library file to watch: the plugin's, or the path the spec names.
-    pub library: Option<PathBuf>,
-    /// With `--watch`: the library's version when it was loaded (taken before the load for a
-    /// path, just after discovery for a name), so a rebuild during the first comparison is
-    /// not missed.
-    pub watched: Option<WatchedFile>,
-}
-
-impl Algo {
-    /// Resolves `spec` (a plugin name or a library path, with parameters) to its plugin. For
-    /// `--watch`, a library given by path is loaded as a fresh copy from the start, so the file
-    /// watched is never the one mapped into the process (a tool that rewrites a loaded library
-    /// in place, rather than replacing it as cargo does, would change code under it).
-    pub(crate) fn resolve(spec: &str, explicit: &[PathBuf], watch: bool) -> Algo {
-        let (name, _) = split_spec(spec);
-        let by_path = plugin_dirs::is_library_path(name);
-        let mut watched = (watch && by_path).then(|| WatchedFile::new(Path::new(name)));
-        let plugin = if watch && by_path {
-            flarebench_sdk::abi::host::load_fresh_copy(Path::new(name))
-                .map_err(|e| format!("plugin `{name}`: {e}"))
-        } else {
-            plugin_dirs::find(name, explicit).map_err(|e| format!("{e:#}"))
-        };
-        let library = match &plugin {
-            Ok(p) => Some(p.path.clone()),
-            Err(_) if by_path => Some(PathBuf::from(name)),
-            Err(_) => None,
-        };
-        if watch && watched.is_none() {
-            watched = library.as_deref().map(WatchedFile::new);
-        }
-        Algo {
-            spec: spec.to_string(),
-            plugin,
-            library,
-            watched,
-        }
-    }
 }
 
 /// Runs one algorithm: prepare, `runs` renders, its mesh drawn by `backend`.

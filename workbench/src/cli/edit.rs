@@ -24,6 +24,10 @@ pub struct EditArgs {
     #[cfg(feature = "window")]
     #[arg(long)]
     pub window: bool,
+    /// The window's ghost plugins (`--algo`, `--plugin`), as for `view`.
+    #[cfg(feature = "window")]
+    #[command(flatten)]
+    pub algos: super::view::AlgoArgs,
 }
 
 pub fn run(args: &EditArgs, _quiet: bool) -> anyhow::Result<()> {
@@ -34,7 +38,9 @@ pub fn run(args: &EditArgs, _quiet: bool) -> anyhow::Result<()> {
     let app = App::new(opened).with_context(|| format!("cannot edit `{spec}`"))?;
     #[cfg(feature = "window")]
     {
-        with_window(app, args.window)
+        // Resolved before the terminal is taken over, so an error is printed plainly.
+        let algos = args.algos.resolve()?;
+        with_window(app, args.window, algos)
     }
     #[cfg(not(feature = "window"))]
     {
@@ -45,7 +51,11 @@ pub fn run(args: &EditArgs, _quiet: bool) -> anyhow::Result<()> {
 /// The editor on a thread of its own beside the window's event loop on this (the main)
 /// thread; the editor alone when there can be no window.
 #[cfg(feature = "window")]
-fn with_window(mut app: App, open_now: bool) -> anyhow::Result<()> {
+fn with_window(
+    mut app: App,
+    open_now: bool,
+    algos: Vec<crate::algo_spec::Algo>,
+) -> anyhow::Result<()> {
     use std::panic::{AssertUnwindSafe, catch_unwind};
     use std::sync::mpsc::channel;
 
@@ -123,8 +133,9 @@ fn with_window(mut app: App, open_now: bool) -> anyhow::Result<()> {
         selection: selection_rx,
         to_editor: to_editor.clone(),
     };
-    let viewer =
-        Viewer::new(system, ViewerOptions::default(), window::waker(proxy)).with_link(link);
+    let viewer = Viewer::new(system, ViewerOptions::default(), window::waker(proxy))
+        .with_link(link)
+        .with_algos(algos)?;
     let notes = to_editor.clone();
     let mut wapp =
         WindowApp::new(&event_loop, viewer, open_now, OnClose::Wait).on_error(Box::new(move |e| {

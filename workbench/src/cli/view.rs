@@ -1,8 +1,12 @@
 //! `flarebench view`: the viewer window on a lens (lens section, ray fans, live flare), or the
-//! same views drawn offscreen into a PNG (`--screenshot`).
+//! same views drawn offscreen into a PNG (`--screenshot`); `--algo` renders the flare through
+//! ghost plugins, reloaded when their libraries are rebuilt ([`AlgoArgs`], shared with
+//! `edit --window`).
 
 use std::path::PathBuf;
 use std::time::Duration;
+
+use crate::algo_spec::Algo;
 
 use anyhow::Context;
 use clap::Args;
@@ -49,6 +53,47 @@ pub struct ViewArgs {
     /// The window's size (logical pixels), WxH; with --screenshot, the offscreen image's.
     #[arg(long, value_parser = parse_size, default_value = "1500x820")]
     pub window_size: (usize, usize),
+    #[command(flatten)]
+    pub algos: AlgoArgs,
+}
+
+/// The flare preview's ghost plugins (`view`, `edit --window`).
+#[derive(Clone, Debug, Default, Args)]
+pub struct AlgoArgs {
+    /// Render the flare preview's ghosts with this plugin instead of the built-in renderer: a
+    /// plugin name or library path, optionally with parameters, NAME:key=value,… (as for
+    /// `compare --algo`). Repeat for several; `A` in the window cycles through the built-in
+    /// renderer and them. Their libraries are watched: a rebuilt one is loaded afresh (beside
+    /// the old, which stays loaded) and the preview renders again; one that fails to load
+    /// leaves the previous in use, with the error in the status line.
+    #[arg(long = "algo", value_name = "NAME[:k=v,…]")]
+    pub algos: Vec<String>,
+    /// Also load this plugin library (repeatable), as for `compare --plugin`.
+    #[arg(long = "plugin", value_name = "PATH")]
+    pub plugins: Vec<PathBuf>,
+}
+
+impl AlgoArgs {
+    /// Each `--algo` resolved to its plugin (as `compare --watch` resolves them: a library
+    /// given by path is loaded as a fresh copy, every library watched from now on); an error
+    /// names the first that did not load or does not take its parameters.
+    pub fn resolve(&self) -> anyhow::Result<Vec<Algo>> {
+        let algos: Vec<Algo> = self
+            .algos
+            .iter()
+            .map(|spec| Algo::resolve(spec, &self.plugins, true))
+            .collect();
+        for a in &algos {
+            match &a.plugin {
+                Err(e) => anyhow::bail!("--algo {}: {e}", a.spec),
+                Ok(p) => {
+                    flarebench_sdk::abi::params::parse_values(&p.params, a.split().1)
+                        .with_context(|| format!("--algo {}", a.spec))?;
+                }
+            }
+        }
+        Ok(algos)
+    }
 }
 
 impl ViewArgs {
@@ -80,8 +125,9 @@ impl ViewArgs {
 pub fn run(args: &ViewArgs, quiet: bool) -> anyhow::Result<()> {
     let loaded = lens_library::load(&args.lens, quiet)?;
     let options = args.options()?;
+    let algos = args.algos.resolve()?;
     if let Some(path) = &args.screenshot {
-        let mut viewer = Viewer::new(loaded.system, options, Box::new(|| {}));
+        let mut viewer = Viewer::new(loaded.system, options, Box::new(|| {})).with_algos(algos)?;
         let (w, h) = args.window_size;
         let mut target = Offscreen::new(w as u32, h as u32)?;
         let settled = target.settle(&mut viewer, Duration::from_secs(600));
@@ -104,7 +150,8 @@ pub fn run(args: &ViewArgs, quiet: bool) -> anyhow::Result<()> {
         loaded.system,
         options,
         window::waker(event_loop.create_proxy()),
-    );
+    )
+    .with_algos(algos)?;
     if args.log {
         viewer = viewer.with_log(Box::new(|line| {
             use std::io::Write;

@@ -17,7 +17,9 @@ use super::debug_view::{DebugState, DebugView};
 use super::flare_view;
 use super::flare_worker::{FlareFrame, FlareJob, FlareScene, FlareWorker, Stage, WorkerEvent};
 use super::lens_view::{self, LensCamera, LensOverlay};
+use super::plugins::{PluginWatcher, SharedWaker, ViewerAlgo, WatchEvent};
 use super::status;
+use crate::algo_spec::Algo;
 use crate::backend::BackendChoice;
 use crate::cli::render::StarburstMode;
 use crate::document::Change;
@@ -105,7 +107,19 @@ pub struct Viewer {
     log: Option<LogSink>,
     /// The lens and flare views' rectangles (points) last logged.
     logged_rects: [Option<egui::Rect>; 2],
+    /// The ghost plugins (`--algo`), and which renders the preview (none: the built-in
+    /// renderer; `A` cycles).
+    algos: Vec<ViewerAlgo>,
+    active_algo: Option<usize>,
+    /// Watches the plugins' libraries and loads rebuilt ones.
+    plugin_watch: Option<PluginWatcher>,
+    /// Wakes the window's event loop (from the render and watch threads).
+    waker: SharedWaker,
 }
+
+/// What the debug views say for a plugin's frame.
+const DEBUG_NOT_FOR_PLUGINS: &str =
+    "the debug views trace the built-in renderer: not available for a plugin (A switches)";
 
 impl std::fmt::Debug for Viewer {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -123,7 +137,9 @@ impl Viewer {
         options: ViewerOptions,
         waker: Box<dyn Fn() + Send + Sync>,
     ) -> Viewer {
-        let worker = FlareWorker::start(options.backend, waker);
+        let waker: SharedWaker = Arc::from(waker);
+        let w = Arc::clone(&waker);
+        let worker = FlareWorker::start(options.backend, Box::new(move || w()));
         let scene = FlareScene {
             lights: options.lights,
             width: options.size.0,
@@ -165,9 +181,110 @@ impl Viewer {
             saved: 0,
             log: None,
             logged_rects: [None; 2],
+            algos: Vec::new(),
+            active_algo: None,
+            plugin_watch: None,
+            waker,
         };
         v.rebuild_lens();
         v
+    }
+
+    /// Gives the viewer ghost plugins (resolved `--algo` arguments, each loaded with its
+    /// parameters, else an error): the first renders the preview (`A` cycles through the
+    /// built-in renderer and them), and their libraries are watched and reloaded when rebuilt.
+    pub fn with_algos(mut self, algos: Vec<Algo>) -> anyhow::Result<Viewer> {
+        let (algos, watch) = super::plugins::from_algos(algos, Arc::clone(&self.waker))?;
+        self.active_algo = (!algos.is_empty()).then_some(0);
+        self.algos = algos;
+        self.plugin_watch = watch;
+        self.dirty = true;
+        Ok(self)
+    }
+
+    /// The plugins given (`--algo`).
+    pub fn algos(&self) -> &[ViewerAlgo] {
+        &self.algos
+    }
+
+    /// The plugin rendering the preview (none: the built-in renderer).
+    pub fn active_algo(&self) -> Option<&ViewerAlgo> {
+        self.active_algo.and_then(|i| self.algos.get(i))
+    }
+
+    /// Renders the preview with plugin `index` of [`Viewer::algos`], or the built-in renderer.
+    pub fn select_algo(&mut self, index: Option<usize>) {
+        let index = index.filter(|&i| i < self.algos.len());
+        if index != self.active_algo {
+            self.active_algo = index;
+            self.dirty = true;
+        }
+        let name = self
+            .active_algo()
+            .map_or("built-in".to_string(), |a| format!("plugin {}", a.spec));
+        self.log(format!("renderer {name}"));
+    }
+
+    /// Takes what the plugin watch found: a reloaded library replaces the plugin of every spec
+    /// using it (the preview renders again if one of them is shown); a failed one is kept as
+    /// the error, the previous plugin still in use. Both are told in the status line, the log
+    /// and the editor.
+    fn on_plugin_watch(&mut self, event: WatchEvent) {
+        let message = match event {
+            WatchEvent::Reloaded {
+                library,
+                plugin,
+                noticed,
+            } => {
+                let mut taken = Vec::new();
+                let mut refused = None;
+                for (i, a) in self.algos.iter_mut().enumerate() {
+                    if a.library != library {
+                        continue;
+                    }
+                    match a.take(plugin) {
+                        Ok(()) => taken.push((i, a.reloads)),
+                        Err(e) => {
+                            a.reload_error = Some(e.clone());
+                            refused = Some(e);
+                        }
+                    }
+                }
+                if taken.iter().any(|&(i, _)| Some(i) == self.active_algo) {
+                    self.dirty = true;
+                }
+                match refused {
+                    Some(e) => format!(
+                        "plugin reload failed, the previous one stays in use: {}: {e}",
+                        library.display()
+                    ),
+                    None => format!(
+                        "reloaded plugin `{}` {} from {} (reload {}, loaded in {:.0} ms)",
+                        plugin.name,
+                        plugin.version,
+                        library.display(),
+                        taken.iter().map(|&(_, n)| n).max().unwrap_or(0),
+                        noticed.elapsed().as_secs_f64() * 1e3
+                    ),
+                }
+            }
+            WatchEvent::Failed { library, error } => {
+                for a in self.algos.iter_mut().filter(|a| a.library == library) {
+                    a.reload_error = Some(error.clone());
+                }
+                format!(
+                    "plugin reload failed, the previous one stays in use: {}: {error}",
+                    library.display()
+                )
+            }
+        };
+        self.log(message.clone());
+        if let Some(link) = &self.link {
+            let _ = link
+                .to_editor
+                .send(ToEditor::Note(format!("window: {message}")));
+        }
+        self.message = Some(message);
     }
 
     /// Connects the viewer to an editor: its document changes and selection drive the view.
@@ -224,15 +341,19 @@ impl Viewer {
         self.debug_view
     }
 
-    /// The ghost the debug views want traced: the selected one, while a view is on.
+    /// The ghost the debug views want traced: the selected one, while a view is on and the
+    /// built-in renderer draws the preview.
     fn wanted_debug(&self) -> Option<GhostPath> {
         self.selected_ghost
-            .filter(|_| self.debug_view != DebugView::Off)
+            .filter(|_| self.debug_view != DebugView::Off && self.active_algo.is_none())
     }
 
     /// What the debug view has to draw: the shown frame's trace of the selected ghost, or why
     /// there is none.
     pub(super) fn debug_state(&self) -> DebugState<'_> {
+        if self.active_algo.is_some() {
+            return DebugState::Note(DEBUG_NOT_FOR_PLUGINS);
+        }
         let Some(g) = self.selected_ghost else {
             return DebugState::Note("select a ghost (click it, or N)");
         };
@@ -252,6 +373,9 @@ impl Viewer {
     pub fn settled(&self) -> bool {
         let last = if self.want_reference {
             Stage::Reference
+        } else if self.active_algo.is_some() {
+            // A plugin's only frame.
+            Stage::Settled
         } else if self.scene.quality == Quality::Fast {
             Stage::Fast
         } else {
@@ -422,6 +546,7 @@ impl Viewer {
             scene: self.scene.clone(),
             reference: self.want_reference,
             debug: self.wanted_debug(),
+            plugin: self.active_algo().map(ViewerAlgo::job),
         });
         self.submitted_debug = self.wanted_debug();
         self.dirty = false;
@@ -447,6 +572,14 @@ impl Viewer {
         }
         for e in self.worker.poll() {
             self.on_worker(e);
+        }
+        let found = self
+            .plugin_watch
+            .as_ref()
+            .map(PluginWatcher::poll)
+            .unwrap_or_default();
+        for e in found {
+            self.on_plugin_watch(e);
         }
         // A debug view needs the selected ghost traced: a new job when the last did not.
         if self.wanted_debug().is_some() && self.wanted_debug() != self.submitted_debug {
@@ -588,7 +721,12 @@ impl Viewer {
             self.scene.aperture = aperture_of(self.blades);
             self.dirty = true;
         }
-        if pressed(Key::G) {
+        if pressed(Key::G) && self.active_algo.is_some() {
+            self.message = Some(
+                "G draws the selected ghost alone with the built-in renderer only (A switches)"
+                    .into(),
+            );
+        } else if pressed(Key::G) {
             self.scene.solo = match self.scene.solo {
                 Some(_) => None,
                 None => self.selected_ghost,
@@ -612,6 +750,19 @@ impl Viewer {
         if pressed(Key::W) {
             self.per_wavelength = !self.per_wavelength;
             self.rebuild_fans();
+        }
+        if pressed(Key::A) {
+            if self.algos.is_empty() {
+                self.message =
+                    Some("A switches to a ghost plugin: give one with --algo NAME".into());
+            } else {
+                let next = match self.active_algo {
+                    None => Some(0),
+                    Some(i) if i + 1 < self.algos.len() => Some(i + 1),
+                    Some(_) => None,
+                };
+                self.select_algo(next);
+            }
         }
         if pressed(Key::E) {
             self.want_reference = !self.want_reference;

@@ -4,6 +4,13 @@
 //! replaces the waiting one (the newest edit wins; a stale job is dropped, never queued), and
 //! the frames of a superseded job are not sent. A panic in a render is caught and reported;
 //! the worker keeps serving.
+//!
+//! A job may name a ghost plugin ([`PluginJob`], `view --algo`) instead of the built-in
+//! renderer: the plugin has no presets, so it is rendered once per job (the settled stage) with
+//! its parameters, its mesh drawn by the backend as `compare` draws it
+//! (`GhostBackend::render_plugin`), the starbursts added as for the built-in renderer. Its
+//! instance is kept from job to job (prepared again when the lens changes, made anew for
+//! another plugin or a reloaded library).
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -13,6 +20,8 @@ use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use flarebench_sdk::LensSystem;
+use flarebench_sdk::abi::author::Scene;
+use flarebench_sdk::abi::host::{LoadedPlugin, PluginInstance};
 use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::frame::Frame;
 use flarebench_sdk::ghost::{GhostPath, ReflectionOrder};
@@ -57,8 +66,41 @@ pub struct FlareJob {
     pub scene: FlareScene,
     /// Also render the dense reference and report the error against it (slow).
     pub reference: bool,
-    /// Trace this ghost alone for the first light for the debug views ([`GhostDebug`]).
+    /// Trace this ghost alone for the first light for the debug views ([`GhostDebug`]);
+    /// built-in renderer only.
     pub debug: Option<GhostPath>,
+    /// Render the ghosts with this plugin instead of the built-in renderer.
+    pub plugin: Option<PluginJob>,
+}
+
+/// A ghost plugin to render a job with (`view --algo`).
+#[derive(Clone, Debug)]
+pub struct PluginJob {
+    /// The plugin, loaded for the life of the process: its library is never unloaded
+    /// (`crate::algo_spec`), so its descriptor is kept as long (`viewer::plugins`), and the
+    /// render thread's instance can borrow it from job to job.
+    pub plugin: &'static LoadedPlugin,
+    /// Its parameter values, one per [`LoadedPlugin::params`].
+    pub values: Vec<f64>,
+    /// The `--algo` argument.
+    pub spec: String,
+    /// How many times its library has been reloaded (0: as loaded at the start).
+    pub reloads: u32,
+}
+
+/// What a plugin's frame reports besides the image.
+#[derive(Clone, Debug)]
+pub struct PluginFrame {
+    pub name: String,
+    pub version: String,
+    pub spec: String,
+    pub reloads: u32,
+    /// Items the plugin reports drawn (ghosts, sprites).
+    pub items_drawn: u32,
+    /// Triangles of its mesh.
+    pub mesh_triangles: usize,
+    /// Time of the plugin's `prepare` when this frame called it (a new instance or lens).
+    pub prepare_ms: Option<f64>,
 }
 
 /// The stages of a job, in the order they are rendered.
@@ -134,6 +176,8 @@ pub struct FlareFrame {
     pub error: Option<ErrorReport>,
     /// The debug views' ghost ([`FlareJob::debug`]) traced alone, or why it could not be.
     pub debug: Option<Result<Arc<GhostDebug>, String>>,
+    /// The plugin that drew the ghosts (none: the built-in renderer).
+    pub plugin: Option<PluginFrame>,
 }
 
 /// What the worker sends back.
@@ -304,8 +348,12 @@ fn serve(shared: &Shared, choice: BackendChoice, tx: &Sender<WorkerEvent>, waker
             }
             continue;
         };
-        let mut stages = vec![Stage::Fast];
-        if job.scene.quality != Quality::Fast || job.reference {
+        // A plugin has no presets: one frame, the settled one.
+        let mut stages = Vec::new();
+        if job.plugin.is_none() {
+            stages.push(Stage::Fast);
+        }
+        if job.plugin.is_some() || job.scene.quality != Quality::Fast || job.reference {
             stages.push(Stage::Settled);
         }
         if job.reference {
@@ -389,6 +437,16 @@ struct Renderer {
     last_plans: Vec<WarmStart>,
     /// Why the backend asked for could not be opened (the CPU is used instead).
     fallback: Option<String>,
+    /// The instance of the last job's plugin.
+    plugin: Option<PluginState>,
+}
+
+/// A plugin's instance kept between jobs.
+struct PluginState {
+    plugin: &'static LoadedPlugin,
+    instance: PluginInstance<'static>,
+    /// The lens it was last prepared for.
+    lens: Option<Arc<LensSystem>>,
 }
 
 impl Renderer {
@@ -402,6 +460,7 @@ impl Renderer {
                 previous_tabulation: None,
                 last_plans: Vec::new(),
                 fallback: None,
+                plugin: None,
             },
             Err(e) => Renderer {
                 backend: GhostBackend::open(BackendChoice::Cpu).expect("the CPU backend opens"),
@@ -411,6 +470,7 @@ impl Renderer {
                 previous_tabulation: None,
                 last_plans: Vec::new(),
                 fallback: Some(format!("{e:#}; drawing on the CPU")),
+                plugin: None,
             },
         }
     }
@@ -459,6 +519,9 @@ impl Renderer {
         // Fault injection for the tests of what a render bug does to the window and editor.
         if std::env::var_os("FLAREBENCH_FAULT").is_some_and(|v| v == "render-panic") {
             panic!("injected render panic (FLAREBENCH_FAULT=render-panic)");
+        }
+        if let Some(p) = &job.plugin {
+            return self.render_plugin(job, p, stage);
         }
         let t0 = Instant::now();
         let sys = job.system.as_ref();
@@ -621,6 +684,135 @@ impl Renderer {
             backend,
             error: None,
             debug,
+            plugin: None,
+        })
+    }
+
+    /// The job's ghosts rendered by its plugin (`compare`'s way: `GhostBackend::render_plugin`),
+    /// then the starbursts, tone mapped. A failed `prepare` or render drops the instance: the
+    /// next job makes a new one (a plugin that panicked is poisoned).
+    fn render_plugin(
+        &mut self,
+        job: &FlareJob,
+        p: &PluginJob,
+        stage: Stage,
+    ) -> anyhow::Result<FlareFrame> {
+        let t0 = Instant::now();
+        let sys = job.system.as_ref();
+        let scene = &job.scene;
+        let frame = frame_for(sys, (scene.width, scene.height));
+        let mut stats = FrameStats::default();
+        let mut info = PluginFrame {
+            name: p.plugin.name.clone(),
+            version: p.plugin.version.clone(),
+            spec: p.spec.clone(),
+            reloads: p.reloads,
+            items_drawn: 0,
+            mesh_triangles: 0,
+            prepare_ms: None,
+        };
+        let mut img = HdrImage::new(frame.width, frame.height);
+        if scene.starburst != StarburstMode::Only {
+            if !self
+                .plugin
+                .as_ref()
+                .is_some_and(|s| std::ptr::eq(s.plugin, p.plugin))
+            {
+                self.plugin = None;
+                let instance = p
+                    .plugin
+                    .instantiate()
+                    .map_err(|e| anyhow::anyhow!("plugin `{}`: {e}", p.spec))?;
+                self.plugin = Some(PluginState {
+                    plugin: p.plugin,
+                    instance,
+                    lens: None,
+                });
+            }
+            let state = self.plugin.as_mut().expect("an instance was just ensured");
+            if !state
+                .lens
+                .as_ref()
+                .is_some_and(|l| Arc::ptr_eq(l, &job.system))
+            {
+                let t = Instant::now();
+                if let Err(e) = state.instance.prepare(sys) {
+                    self.plugin = None;
+                    anyhow::bail!("plugin `{}`: {e}", p.spec);
+                }
+                state.lens = Some(Arc::clone(&job.system));
+                info.prepare_ms = Some(ms(t));
+                stats.plan_ms = ms(t);
+            }
+            let abi_scene = Scene {
+                lights: scene.lights.iter().map(LightSpec::scene_light).collect(),
+                frame,
+                aperture: scene.aperture.clone(),
+            };
+            let t = Instant::now();
+            match self
+                .backend
+                .render_plugin(&mut state.instance, &abi_scene, &p.values, &mut img)
+            {
+                Ok(out) => {
+                    info.items_drawn = out.items_drawn;
+                    info.mesh_triangles = out.mesh_triangles;
+                }
+                Err(e) => {
+                    self.plugin = None;
+                    return Err(e.context(format!("plugin `{}`", p.spec)));
+                }
+            }
+            stats.ghosts_ms = ms(t);
+            stats.ghosts_drawn = info.items_drawn as usize;
+            stats.triangles = info.mesh_triangles;
+            stats.auto_exposure_ev = lit_exposure(&img).map_or(0.0, |ev| ev + GHOST_HEADROOM_EV);
+        }
+
+        let t = Instant::now();
+        if scene.starburst != StarburstMode::Off {
+            let setup = StarburstSetup {
+                aperture: &scene.aperture,
+                dust: None,
+                settings: StarburstSettings::default(),
+            };
+            // On the CPU whatever the backend: the GPU's starburst pass composites onto its
+            // own output, which holds the plugin's mesh but not its own pixels.
+            crate::compose::add_starbursts(
+                &mut img,
+                sys,
+                &frame,
+                &scene.lights,
+                &setup,
+                &mut self.starbursts,
+            )?;
+            if scene.starburst == StarburstMode::Only {
+                stats.auto_exposure_ev = lit_exposure(&img).unwrap_or(0.0);
+            }
+        }
+        stats.starburst_ms = ms(t);
+
+        let t = Instant::now();
+        let rgba = tone_rgba(&img, stats.auto_exposure_ev + scene.exposure_offset_ev);
+        stats.tone_ms = ms(t);
+        stats.total_ms = ms(t0);
+        let mut backend = self.backend.report().clone();
+        if let Some(why) = &self.fallback {
+            backend.note = Some(why.clone());
+        }
+        Ok(FlareFrame {
+            id: job.id,
+            stage,
+            quality: scene.quality,
+            hdr: Arc::new(img),
+            rgba,
+            exposure_offset_ev: scene.exposure_offset_ev,
+            stats,
+            ghosts: Vec::new(),
+            backend,
+            error: None,
+            debug: None,
+            plugin: Some(info),
         })
     }
 }

@@ -11,6 +11,7 @@
 //!   irradiance) and their false-colour ramp
 //! - `bounds_table`: the lens's ghost bounds tabulated over the light's angles while the render
 //!   thread is idle, for fast frames planned by lookup
+//! - `plugins`: the ghost plugins (`--algo`) and the thread that reloads their rebuilt libraries
 //! - `status`: the status line
 //! - `gfx`: egui's shapes drawn with wgpu into any texture view
 //! - `offscreen`: the viewer drawn into a texture and read back (tests, screenshots)
@@ -27,7 +28,10 @@ pub mod gfx;
 pub mod ghost_debug;
 pub mod lens_view;
 pub mod offscreen;
+pub mod plugins;
 pub mod status;
 pub mod window;
 
+/// The starburst mode of [`ViewerOptions`] (`render --starburst`).
+pub use crate::cli::render::StarburstMode;
 pub use app::{EditorLink, Viewer, ViewerOptions};

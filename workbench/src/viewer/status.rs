@@ -1,6 +1,7 @@
 //! The status line: frame time by stage, ghosts drawn and left out with the dropped energy
-//! share, backend and adapter, the error when known, and the last message (a failed or
-//! panicked render, a save).
+//! share (or, for a plugin's frame, the plugin, its version and reloads, items and triangles),
+//! backend and adapter, the error when known, the renderer in use and the last failed reload
+//! of its library, and the last message (a failed or panicked render, a reload, a save).
 
 use egui::{Color32, RichText, Ui};
 
@@ -12,11 +13,54 @@ pub fn help_line() -> &'static str {
     "lens: drag pan · wheel zoom · F fit · W wavelengths | flare: drag light · wheel exposure · \
      click ghost · N / Shift-N next/previous ghost · G ghost alone · S starburst on/off/only · \
      Q quality · B blades · L labels · D debug view (grid/stop/radius/irradiance) · E error · \
-     P save PNG · X save EXR"
+     A renderer (built-in / --algo plugins) · P save PNG · X save EXR"
+}
+
+/// The error part of a frame's line.
+fn error_text(f: &FlareFrame) -> String {
+    let mut line = String::new();
+    if let Some(e) = &f.error {
+        line += &format!(
+            " · error {:.2}% RMSE, energy {:+.2}%",
+            100.0 * e.relative_rmse,
+            100.0 * e.energy_error
+        );
+        if let Some(t) = f.stats.reference_ms {
+            line += &format!(" (reference {:.1} s)", t / 1e3);
+        }
+    }
+    line
+}
+
+/// A plugin's frame as one line of text: the plugin, its version and reloads, the times,
+/// what it drew.
+fn plugin_frame_line(f: &FlareFrame, p: &super::flare_worker::PluginFrame) -> String {
+    let s = &f.stats;
+    let prepare = p
+        .prepare_ms
+        .map_or(String::new(), |t| format!("prepare {t:.1}, "));
+    let mut line = format!(
+        "frame by plugin `{}` {} (reload {}) {:.0} ms: {prepare}render {:.1}, starburst {:.1}, \
+         tone {:.1} ms · {} drawn · {} triangles",
+        p.name,
+        p.version,
+        p.reloads,
+        s.total_ms,
+        s.ghosts_ms,
+        s.starburst_ms,
+        s.tone_ms,
+        p.items_drawn,
+        p.mesh_triangles
+    );
+    line += &error_text(f);
+    line
 }
 
 /// The frame's figures as one line of text.
 pub fn frame_line(f: &FlareFrame) -> String {
+    if let Some(p) = &f.plugin {
+        return plugin_frame_line(f, p);
+    }
     let s = &f.stats;
     let stage = match f.stage {
         Stage::Fast => "fast",
@@ -50,17 +94,42 @@ pub fn frame_line(f: &FlareFrame) -> String {
     if let Some(t) = s.debug_ms {
         line += &format!(" · debug trace {t:.1} ms");
     }
-    if let Some(e) = &f.error {
-        line += &format!(
-            " · error {:.2}% RMSE, energy {:+.2}%",
-            100.0 * e.relative_rmse,
-            100.0 * e.energy_error
-        );
-        if let Some(t) = s.reference_ms {
-            line += &format!(" (reference {:.1} s)", t / 1e3);
-        }
-    }
+    line += &error_text(f);
     line
+}
+
+/// The renderer in use, when plugins were given: the built-in one, or the plugin with its
+/// library and reloads; and the last failed reload of that library, if any.
+pub fn renderer_line(v: &Viewer) -> Option<(String, Option<String>)> {
+    if v.algos().is_empty() {
+        return None;
+    }
+    Some(match v.active_algo() {
+        None => (
+            format!(
+                "renderer: built-in (A: {})",
+                v.algos()
+                    .iter()
+                    .map(|a| a.spec.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+            None,
+        ),
+        Some(a) => (
+            format!(
+                "renderer: plugin {} — `{}` {} from {}, reload {}",
+                a.spec,
+                a.plugin.name,
+                a.plugin.version,
+                a.library.display(),
+                a.reloads
+            ),
+            a.reload_error
+                .as_ref()
+                .map(|e| format!("last reload failed (the previous plugin stays in use): {e}")),
+        ),
+    })
 }
 
 /// The backend as one line of text.
@@ -110,6 +179,14 @@ pub fn show(ui: &mut Ui, v: &Viewer) {
         None => {
             ui.label("rendering the first frame…");
         }
+    }
+    if let Some((line, error)) = renderer_line(v) {
+        ui.horizontal_wrapped(|ui| {
+            ui.label(line);
+            if let Some(e) = error {
+                ui.label(RichText::new(e).color(Color32::from_rgb(220, 60, 60)));
+            }
+        });
     }
     if let Some(d) = v.hovered_description() {
         ui.label(d);

@@ -2,25 +2,17 @@
 //! library files and the lens file are watched (`crate::file_watch`); when one has been
 //! rebuilt or saved it is loaded again and the comparison runs and prints again.
 //!
-//! A rebuilt library is loaded as a fresh copy (`host::load_fresh_copy`) beside the one in
-//! use, which stays loaded: libraries are never unloaded, because code or static data of the
-//! old one may still be referenced (an instance being dropped, a string it handed out), and
-//! unloading a library whose initialisers ran is never safe. Each reload costs the memory of
-//! one more copy of the library's code — a few MB per rebuild of a debug build — for the life
-//! of the process. A library that fails to load (not a plugin, another ABI, an invalid header,
-//! a parameter the `--algo` arguments name that it no longer has) leaves the previous version
-//! in use, with the error shown; a lens file that fails to load leaves the previous lens.
+//! A rebuilt library is loaded as a fresh copy beside the one in use, which stays loaded
+//! (`crate::algo_spec::reload`, shared with the viewer window); a library that fails to load
+//! leaves the previous version in use, with the error shown; a lens file that fails to load
+//! leaves the previous lens.
 
-use std::path::Path;
-
-use flarebench_sdk::abi::host;
-use flarebench_sdk::abi::params::parse_values;
 use serde::Serialize;
 
-use super::{Algo, CompareArgs, CompareReport, Setup, compare, split_spec, text};
+use super::{Algo, CompareArgs, CompareReport, Setup, compare, text};
+use crate::algo_spec::reload;
 use crate::backend::GhostBackend;
 use crate::file_watch::{POLL_INTERVAL, WatchedFile};
-use crate::plugin_dirs::is_library_path;
 
 /// What the loop prints: as text, or with `--json` as one JSON object per line.
 #[derive(Debug, Serialize)]
@@ -69,35 +61,6 @@ fn print(event: &Event<'_>, json: bool) -> anyhow::Result<()> {
         Event::Compared(report) => print!("{}", text(report)),
     }
     Ok(())
-}
-
-/// Loads a fresh copy of the library at `path` for every algorithm that uses it, once all of
-/// them accept it (the plugin they name, their parameters); else changes nothing. The plugin's
-/// name and parameter defaults, or why it was refused.
-fn reload(path: &Path, algos: &mut [Algo]) -> Result<(String, Vec<(String, String)>), String> {
-    let plugin = host::load_fresh_copy(path).map_err(|e| e.to_string())?;
-    for algo in algos.iter().filter(|a| a.library.as_deref() == Some(path)) {
-        let (name, params) = split_spec(&algo.spec);
-        if !is_library_path(name) && plugin.name != name {
-            return Err(format!(
-                "it now holds the plugin `{}`, not `{name}` (--algo {})",
-                plugin.name, algo.spec
-            ));
-        }
-        parse_values(&plugin.params, params).map_err(|e| format!("--algo {}: {e}", algo.spec))?;
-    }
-    for algo in algos
-        .iter_mut()
-        .filter(|a| a.library.as_deref() == Some(path))
-    {
-        algo.plugin = Ok(plugin.clone());
-    }
-    let defaults = plugin
-        .params
-        .iter()
-        .map(|p| (p.name.clone(), p.format_value(p.default)))
-        .collect();
-    Ok((plugin.name, defaults))
 }
 
 /// Prints `first`, then watches and compares again on every change until Ctrl-C (or
