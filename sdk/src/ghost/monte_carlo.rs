@@ -182,7 +182,8 @@ impl McImages {
         }
     }
 
-    fn add(&mut self, o: &McImages) {
+    /// Adds `o`'s images to these.
+    pub fn add(&mut self, o: &McImages) {
         add_pixels(&mut self.image, &o.image);
         add_pixels(&mut self.halves[0], &o.halves[0]);
         add_pixels(&mut self.halves[1], &o.halves[1]);
