@@ -10,7 +10,9 @@
 //! The Monte-Carlo reference traces each ghost at the mesh reference's bands, in the same
 //! colours; its centroid and moments are those of the rays' landing points in the frame
 //! (exact positions), the images' those of pixel centres (which adds 1/12 px² to each
-//! variance).
+//! variance); the Monte-Carlo image's own moments are given too. Its pixels sum the rays
+//! landing in them, as the rasterizer's exact coverage does the triangles, so the three images
+//! are compared pixel for pixel, ghost by ghost and all together.
 
 use flarebench_sdk::LensSystem;
 use flarebench_sdk::aperture::Aperture;
@@ -102,11 +104,32 @@ pub struct GhostRow {
     pub mc_moments_px2: [f64; 3],
     /// Rays the Monte-Carlo image estimate traced.
     pub mc_rays: usize,
+    /// The Monte-Carlo image's moments, from pixel centres as the other two images' are (the
+    /// like-for-like figure for a ghost a few pixels across, where the exact moments above
+    /// differ from any image's by the pixels' own 1/12 px² and more).
+    pub mc_image: ImageMoments,
     /// The mesh reference's image of the ghost (`None` when not rendered, or it has no job).
     pub reference: Option<ImageMoments>,
     /// The renderer's (`None` when the plan left it out: `dropped` says why).
     pub renderer: Option<ImageMoments>,
     pub dropped: Option<DropReason>,
+    /// This ghost's image against its Monte-Carlo image: relative RMSE of the mesh reference's
+    /// and of the renderer's, and the Monte-Carlo image's own noise (each over the ghost's own
+    /// Monte-Carlo image; `None` where there is no image or it is black).
+    pub image: GhostImageErrors,
+}
+
+/// One ghost's image errors against its Monte-Carlo image.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct GhostImageErrors {
+    /// Relative RMSE over the ghost's own Monte-Carlo image.
+    pub reference_rmse: Option<f64>,
+    pub renderer_rmse: Option<f64>,
+    pub mc_noise: Option<f64>,
+    /// √Σ(a − b)² of this ghost's image over √Σb² of all the compared ghosts' Monte-Carlo
+    /// image: what it adds to the whole image's error (exactly, where ghosts do not overlap).
+    pub reference_share: Option<f64>,
+    pub renderer_share: Option<f64>,
 }
 
 /// The whole comparison for one light.
@@ -218,6 +241,7 @@ pub fn crosscheck(
         ..RenderOptions::default()
     };
     let mut rows = Vec::new();
+    let mut ghost_errors = Vec::new();
     let paths: Vec<GhostPath> = ref_plan
         .ghosts
         .iter()
@@ -244,6 +268,7 @@ pub fn crosscheck(
                 })
                 .collect(),
         };
+        let mut mc_images = McImages::new(&frame);
         let mc = ghost_monte_carlo(
             system,
             aperture,
@@ -252,8 +277,9 @@ pub fn crosscheck(
             (theta, phi, 1.0),
             &bands,
             &opts.mc,
-            Some(&mut images.mc),
+            Some(&mut mc_images),
         );
+        images.mc.add(&mc_images);
         let mc_share = match Sequence::ghost_path(system, BOUNDS_LAMBDA_NM, &path) {
             Ok(seq) => {
                 let g = path_flux(system, &seq, theta, &opts.mc);
@@ -271,10 +297,12 @@ pub fn crosscheck(
             Err(_) => McEstimate::default(),
         };
         let bounds_share = ref_job.map(|g| g.energy_share);
+        let mut errors = ImageErrors::new(&mc_images);
         let reference = match (ref_job, images.reference.as_mut()) {
             (Some(job), Some(all)) => {
                 let img = draw_alone(system, aperture, frame, &ref_plan, job, band_by_band)?;
                 add_into(all, &img);
+                errors.reference = Some(sum_sq(&img, Some(&mc_images.image)));
                 Some(ImageMoments::of(&img))
             }
             _ => None,
@@ -291,6 +319,7 @@ pub fn crosscheck(
                     RenderOptions::default(),
                 )?;
                 add_into(&mut images.renderer, &img);
+                errors.renderer = Some(sum_sq(&img, Some(&mc_images.image)));
                 Some(ImageMoments::of(&img))
             }
             None => None,
@@ -309,11 +338,19 @@ pub fn crosscheck(
             mc_centroid_err_px: mc.as_ref().map_or([f64::NAN; 2], |m| m.centroid_err_px),
             mc_moments_px2: mc.as_ref().map_or([f64::NAN; 3], |m| m.moments_px2),
             mc_rays: mc.as_ref().map_or(0, |m| m.rays),
+            mc_image: ImageMoments::of(&mc_images.image),
             mc,
             reference,
             renderer,
             dropped,
+            image: GhostImageErrors::default(),
         });
+        ghost_errors.push(errors);
+    }
+    // Each ghost's share of the whole image's error, now that the whole is known.
+    let whole = sum_sq(&images.mc.image, None).sqrt();
+    for (row, e) in rows.iter_mut().zip(&ghost_errors) {
+        row.image = e.summary(whole);
     }
     let rmse = |img: &HdrImage| {
         img.relative_rmse(&images.mc.image)
@@ -331,6 +368,59 @@ pub fn crosscheck(
         mc_noise,
         images,
     })
+}
+
+/// One ghost's squared image differences against its Monte-Carlo image.
+struct ImageErrors {
+    /// Σb² of the Monte-Carlo image, and Σ(a − b)² of the mesh reference's and renderer's.
+    mc2: f64,
+    noise: Option<f64>,
+    reference: Option<f64>,
+    renderer: Option<f64>,
+}
+
+impl ImageErrors {
+    fn new(mc: &McImages) -> Self {
+        let mc2 = sum_sq(&mc.image, None);
+        ImageErrors {
+            mc2,
+            noise: (mc2 > 0.0).then(|| mc.relative_noise()),
+            reference: None,
+            renderer: None,
+        }
+    }
+
+    /// Relative figures, `whole` = √Σb² of every compared ghost's Monte-Carlo image.
+    fn summary(&self, whole: f64) -> GhostImageErrors {
+        let own = |d2: Option<f64>| d2.filter(|_| self.mc2 > 0.0).map(|d| (d / self.mc2).sqrt());
+        let share = |d2: Option<f64>| d2.filter(|_| whole > 0.0).map(|d| d.sqrt() / whole);
+        GhostImageErrors {
+            reference_rmse: own(self.reference),
+            renderer_rmse: own(self.renderer),
+            mc_noise: self.noise,
+            reference_share: share(self.reference),
+            renderer_share: share(self.renderer),
+        }
+    }
+}
+
+/// Σa² over every pixel and channel, or Σ(a − b)² with `b`.
+fn sum_sq(a: &HdrImage, b: Option<&HdrImage>) -> f64 {
+    match b {
+        None => a
+            .pixels
+            .iter()
+            .flatten()
+            .map(|&v| f64::from(v).powi(2))
+            .sum(),
+        Some(b) => a
+            .pixels
+            .iter()
+            .flatten()
+            .zip(b.pixels.iter().flatten())
+            .map(|(&x, &y)| (f64::from(x) - f64::from(y)).powi(2))
+            .sum(),
+    }
 }
 
 fn add_into(all: &mut HdrImage, img: &HdrImage) {

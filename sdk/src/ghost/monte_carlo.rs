@@ -24,8 +24,9 @@
 //! Fresnel/coating factors along its path, `τ` the aperture's (hard-edged) transmission at its
 //! last stop crossing (the renderer's convention, `docs/physics.md`), and `E` the light's
 //! irradiance. The flux is added where it lands: to sums for the energy, the centroid and the
-//! second moments (in pixels of the frame, exactly where the ray lands) and, bilinearly, to an
-//! image in the band's colour — the same image units as the renderer (an image's sum is
+//! second moments (in pixels of the frame, exactly where the ray lands) and to the pixel it
+//! lands in of an image, in the band's colour (the pixel's flux, as the rasterizer's exact
+//! coverage gives it) — the same image units as the renderer (an image's sum is
 //! `Σ_band rgb · Φ_band`).
 //!
 //! **The rays themselves.** [`GhostRays`] (`rays.rs`) prepares one ghost's sequences, active
@@ -182,7 +183,8 @@ impl McImages {
         }
     }
 
-    fn add(&mut self, o: &McImages) {
+    /// Adds `o`'s images to these.
+    pub fn add(&mut self, o: &McImages) {
         add_pixels(&mut self.image, &o.image);
         add_pixels(&mut self.halves[0], &o.halves[0]);
         add_pixels(&mut self.halves[1], &o.halves[1]);
@@ -559,27 +561,19 @@ pub fn ghost_monte_carlo(
     })
 }
 
-/// Adds `e` at pixel position (`px`, `py`) (pixel centres at half-integers) to its four
-/// nearest pixels, bilinearly; what falls outside the image is dropped.
+/// Adds `e` to the pixel that holds the point (`px`, `py`) (pixel `(i, j)` spans `[i, i + 1)
+/// × [j, j + 1)`); a point outside the image is dropped. A pixel then sums the flux of the rays
+/// landing in its square: the same quantity as the rasterizer's exact coverage (a triangle's
+/// irradiance integrated over the pixel), estimated without bias. (A bilinear splat would
+/// estimate the irradiance blurred by a tent one pixel wide: wider than the rasterized image
+/// by 1/12 px² per axis, which on a ghost of a pixel or two is most of its size.)
 fn splat(img: &mut HdrImage, px: f64, py: f64, e: [f64; 3]) {
-    let (fx, fy) = (px - 0.5, py - 0.5);
-    if !(fx > -1.0 && fy > -1.0 && fx < img.width as f64 && fy < img.height as f64) {
+    if !(px >= 0.0 && py >= 0.0 && px < img.width as f64 && py < img.height as f64) {
         return;
     }
-    let (x0, y0) = (fx.floor(), fy.floor());
-    let (tx, ty) = (fx - x0, fy - y0);
-    let (x0, y0) = (x0 as i64, y0 as i64);
-    for (dy, wy) in [(0, 1.0 - ty), (1, ty)] {
-        for (dx, wx) in [(0, 1.0 - tx), (1, tx)] {
-            let (x, y) = (x0 + dx, y0 + dy);
-            if x < 0 || y < 0 || x >= img.width as i64 || y >= img.height as i64 {
-                continue;
-            }
-            let p = &mut img.pixels[y as usize * img.width + x as usize];
-            for c in 0..3 {
-                p[c] += (e[c] * wx * wy) as f32;
-            }
-        }
+    let p = &mut img.pixels[py as usize * img.width + px as usize];
+    for c in 0..3 {
+        p[c] += e[c] as f32;
     }
 }
 

@@ -4,15 +4,17 @@
 //! ghost's energy in the frame, centroid shift and second moments, and the images of all the
 //! compared ghosts against the Monte-Carlo image.
 
+use anyhow::Context;
 use clap::Args;
 use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::ghost::GhostPath;
 use flarebench_sdk::ghost::monte_carlo::McSettings;
-use ghost_raytrace::crosscheck::{CrosscheckOptions, GhostRow, crosscheck};
+use ghost_raytrace::crosscheck::{Crosscheck, CrosscheckOptions, GhostRow, crosscheck};
 use ghost_raytrace::scene::{LightSpec, Quality};
 
 use super::render::{frame_for, parse_size};
 use crate::lens_library;
+use crate::output::{ToneMap, save_image};
 use crate::table::Table;
 
 #[derive(Debug, Args)]
@@ -46,6 +48,10 @@ pub struct CrosscheckArgs {
     /// Print one JSON object instead of the table.
     #[arg(long)]
     pub json: bool,
+    /// Write the compared ghosts' images into this directory as OpenEXR: `mc.exr`,
+    /// `reference.exr` (unless `--no-reference`) and `renderer.exr`.
+    #[arg(long, value_name = "DIR")]
+    pub export: Option<std::path::PathBuf>,
 }
 
 fn parse_ghost(s: &str) -> Result<GhostPath, String> {
@@ -93,13 +99,27 @@ fn row(g: &GhostRow) -> Vec<String> {
         ratio(g.renderer.map(|r| r.energy), e),
         shift(g.reference.map(|r| r.centroid_px), g.mc_centroid_px),
         shift(g.renderer.map(|r| r.centroid_px), g.mc_centroid_px),
-        spread(g.reference.map(|r| r.moments_px2), g.mc_moments_px2),
-        spread(g.renderer.map(|r| r.moments_px2), g.mc_moments_px2),
+        spread(g.reference.map(|r| r.moments_px2), g.mc_image.moments_px2),
+        spread(g.renderer.map(|r| r.moments_px2), g.mc_image.moments_px2),
         g.dropped
             .map(|d| format!("{d:?}"))
             .unwrap_or_default()
             .to_lowercase(),
     ]
+}
+
+/// Writes the three images of `c` into `dir` (created if missing).
+fn export(dir: &std::path::Path, c: &Crosscheck) -> anyhow::Result<()> {
+    std::fs::create_dir_all(dir)
+        .with_context(|| format!("could not create `{}`", dir.display()))?;
+    let tone = ToneMap::default();
+    let images = &c.images;
+    save_image(&images.mc.image, &dir.join("mc.exr"), &tone)?;
+    if let Some(r) = &images.reference {
+        save_image(r, &dir.join("reference.exr"), &tone)?;
+    }
+    save_image(&images.renderer, &dir.join("renderer.exr"), &tone)?;
+    Ok(())
 }
 
 pub fn run(args: &CrosscheckArgs, quiet: bool) -> anyhow::Result<()> {
@@ -119,6 +139,9 @@ pub fn run(args: &CrosscheckArgs, quiet: bool) -> anyhow::Result<()> {
         ghosts: args.ghosts.clone(),
     };
     let c = crosscheck(&sys, &Aperture::Circular, frame, &args.light, &opts)?;
+    if let Some(dir) = &args.export {
+        export(dir, &c)?;
+    }
     if args.json {
         println!("{}", serde_json::to_string_pretty(&c)?);
         return Ok(());

@@ -172,8 +172,7 @@ fn the_splatted_image_holds_the_in_frame_flux_and_the_same_seed_gives_the_same_b
             assert!((p[c] - q[c]).abs() <= 1e-5 * p[c].abs().max(1e-12));
         }
     }
-    // Bilinear splats keep the flux of rays landing over half a pixel inside the frame; this
-    // ghost lies well inside.
+    // Each ray's flux goes to the pixel it lands in; this ghost lies well inside the frame.
     let sum = ia.image.sum()[1];
     assert!(
         (sum / a.flux_in_frame.mean - 1.0).abs() < 1e-5,
