@@ -78,6 +78,10 @@ impl Lens {
     }
 
     fn check_share(&self, path: GhostPath, deg: f64) {
+        self.check_share_within(path, deg, SHARE_TOLERANCE);
+    }
+
+    fn check_share_within(&self, path: GhostPath, deg: f64, tolerance: f64) {
         let theta = deg.to_radians();
         let b = self
             .bounds(path, theta)
@@ -88,7 +92,7 @@ impl Lens {
             "{path} at {deg}°: the Monte-Carlo reference sees no light"
         );
         assert!(
-            (b.energy_share - mc).abs() <= SIGMAS * err + SHARE_TOLERANCE * mc,
+            (b.energy_share - mc).abs() <= SIGMAS * err + tolerance * mc,
             "{path} at {deg}°: bounds {:e}, Monte-Carlo {mc:e} ± {err:e}",
             b.energy_share
         );
@@ -194,6 +198,15 @@ fn the_nikon_zoom_s_ghosts_whose_search_rays_all_stop_are_found_with_their_light
     for name in ["10-6", "13-3", "13-6"] {
         l.check_share(name.parse().expect("a ghost name"), 20.0);
     }
+}
+
+#[test]
+fn thin_rings_carry_their_monte_carlo_share() {
+    let l = lens("nikon-zoom-short");
+    // Rings a cell or two wide, whose excess has a kink where two clear apertures meet inside
+    // a cell: −3.3% and −3.0% before their edge cells were traced again, now within 0.9%.
+    l.check_share_within("14-11".parse().expect("a ghost name"), 0.0, 0.015);
+    l.check_share_within("8-3".parse().expect("a ghost name"), 5.0, 0.015);
 }
 
 #[test]
