@@ -23,8 +23,10 @@ use flarebench_sdk::LensSystem;
 use flarebench_sdk::io::read_lens;
 use ghost_raytrace::scene::{LightSpec, Quality};
 
+mod offscreen_viewer;
+use offscreen_viewer::{SETTLE, key, settled};
+
 const WINDOW: (u32, u32) = (1200, 640);
-const SETTLE: Duration = Duration::from_secs(240);
 
 fn lens(name: &str) -> LensSystem {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -41,14 +43,6 @@ fn options() -> ViewerOptions {
         quality: Quality::Fast,
         ..ViewerOptions::default()
     }
-}
-
-fn settled(viewer: &mut Viewer, target: &mut Offscreen) {
-    assert!(
-        target.settle(viewer, SETTLE),
-        "the viewer did not settle; status: {:?}",
-        viewer.message()
-    );
 }
 
 /// Compares `got` with the golden PNG `name`, within the module's tolerance.
@@ -410,19 +404,6 @@ fn the_wheel_changes_the_exposure_without_rendering_anew() {
         mean(&before),
         mean(&after)
     );
-}
-
-/// A key pressed and released in one pass.
-fn key(k: egui::Key) -> Vec<Event> {
-    [true, false]
-        .map(|pressed| Event::Key {
-            key: k,
-            physical_key: None,
-            pressed,
-            repeat: false,
-            modifiers: Default::default(),
-        })
-        .to_vec()
 }
 
 /// The drawn ghost with the largest energy share.

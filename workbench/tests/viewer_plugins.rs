@@ -12,7 +12,6 @@ use std::path::{Path, PathBuf};
 use std::sync::mpsc::{Receiver, channel};
 use std::time::{Duration, Instant};
 
-use egui::Event;
 use flarebench::algo_spec::Algo;
 use flarebench::backend::{BackendChoice, GhostBackend};
 use flarebench::link::{FromEditor, ToEditor};
@@ -28,10 +27,12 @@ use flarebench_sdk::image::HdrImage;
 use flarebench_test_support::{load_lens, plugin_library};
 use ghost_raytrace::scene::{LightSpec, Quality};
 
+mod offscreen_viewer;
+use offscreen_viewer::{key, settled};
+
 const WINDOW: (u32, u32) = (1200, 640);
 const SIZE: (usize, usize) = (480, 270);
 /// Longest wait for a frame (a guard against a hang, not a timing assertion).
-const SETTLE: Duration = Duration::from_secs(240);
 /// Longest wait for the watch thread to notice a rewritten library: it polls every 200 ms
 /// and takes a file once it has held still for two polls, so well under a second; the rest
 /// is a guard against a hang on a loaded machine.
@@ -47,27 +48,6 @@ fn options() -> ViewerOptions {
         starburst: StarburstMode::Off,
         ..ViewerOptions::default()
     }
-}
-
-fn settled(viewer: &mut Viewer, target: &mut Offscreen) {
-    assert!(
-        target.settle(viewer, SETTLE),
-        "the viewer did not settle; status: {:?}, failure: {:?}",
-        viewer.message(),
-        viewer.render_failure()
-    );
-}
-
-fn key(k: egui::Key) -> Vec<Event> {
-    [true, false]
-        .map(|pressed| Event::Key {
-            key: k,
-            physical_key: None,
-            pressed,
-            repeat: false,
-            modifiers: Default::default(),
-        })
-        .to_vec()
 }
 
 /// What `compare` renders with the library at `path` (default parameters) on the CPU backend,

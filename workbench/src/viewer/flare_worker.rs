@@ -664,28 +664,19 @@ impl Renderer {
         }
         stats.starburst_ms = ms(t);
 
-        let t = Instant::now();
-        let rgba = tone_rgba(&img, stats.auto_exposure_ev + scene.exposure_offset_ev);
-        stats.tone_ms = ms(t);
-        stats.total_ms = ms(t0);
-        let mut backend = self.backend.report().clone();
-        if let Some(why) = &self.fallback {
-            backend.note = Some(why.clone());
-        }
-        Ok(FlareFrame {
-            id: job.id,
-            stage,
-            quality,
-            hdr: Arc::new(img),
-            rgba,
-            exposure_offset_ev: scene.exposure_offset_ev,
+        Ok(self.finish(
+            job,
+            img,
             stats,
-            ghosts,
-            backend,
-            error: None,
-            debug,
-            plugin: None,
-        })
+            t0,
+            FrameExtras {
+                stage,
+                quality,
+                ghosts,
+                debug,
+                plugin: None,
+            },
+        ))
     }
 
     /// The job's ghosts rendered by its plugin (`compare`'s way: `GhostBackend::render_plugin`),
@@ -792,29 +783,65 @@ impl Renderer {
         }
         stats.starburst_ms = ms(t);
 
+        Ok(self.finish(
+            job,
+            img,
+            stats,
+            t0,
+            FrameExtras {
+                stage,
+                quality: scene.quality,
+                ghosts: Vec::new(),
+                debug: None,
+                plugin: Some(info),
+            },
+        ))
+    }
+
+    /// The frame of `job` from its linear image: tone mapped at the automatic exposure plus
+    /// the scene's offset, with the backend's report and the total time since `t0`.
+    fn finish(
+        &self,
+        job: &FlareJob,
+        img: HdrImage,
+        mut stats: FrameStats,
+        t0: Instant,
+        extras: FrameExtras,
+    ) -> FlareFrame {
+        let offset = job.scene.exposure_offset_ev;
         let t = Instant::now();
-        let rgba = tone_rgba(&img, stats.auto_exposure_ev + scene.exposure_offset_ev);
+        let rgba = tone_rgba(&img, stats.auto_exposure_ev + offset);
         stats.tone_ms = ms(t);
         stats.total_ms = ms(t0);
         let mut backend = self.backend.report().clone();
         if let Some(why) = &self.fallback {
             backend.note = Some(why.clone());
         }
-        Ok(FlareFrame {
+        FlareFrame {
             id: job.id,
-            stage,
-            quality: scene.quality,
+            stage: extras.stage,
+            quality: extras.quality,
             hdr: Arc::new(img),
             rgba,
-            exposure_offset_ev: scene.exposure_offset_ev,
+            exposure_offset_ev: offset,
             stats,
-            ghosts: Vec::new(),
+            ghosts: extras.ghosts,
             backend,
             error: None,
-            debug: None,
-            plugin: Some(info),
-        })
+            debug: extras.debug,
+            plugin: extras.plugin,
+        }
     }
+}
+
+/// What a frame carries besides its image: its stage and preset, and the built-in renderer's
+/// footprints and debug trace, or the plugin that drew it.
+struct FrameExtras {
+    stage: Stage,
+    quality: Quality,
+    ghosts: Vec<GhostFootprint>,
+    debug: Option<Result<Arc<GhostDebug>, String>>,
+    plugin: Option<PluginFrame>,
 }
 
 fn ms(t: Instant) -> f64 {
