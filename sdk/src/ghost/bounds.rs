@@ -247,9 +247,7 @@ pub fn clipped_flux(g: &GridTrace, theta: f64) -> f64 {
             let quad = [k00, k00 + 1, k00 + n + 1, k00 + n];
             let passes = quad.map(|k| g.passes(k));
             if passes.iter().all(|&p| p) {
-                // Wholly inside: both triangles' mean weights.
-                let w = quad.map(|k| g.weight[k] as f64);
-                sum += (2.0 * (w[0] + w[2]) + w[1] + w[3]) / 3.0;
+                sum += inner_cell(g, quad);
                 continue;
             }
             if !passes.iter().any(|&p| p) {
@@ -304,8 +302,7 @@ pub fn edge_refined_flux(
             let quad = [k00, k00 + 1, k00 + n + 1, k00 + n];
             let passing = quad.iter().filter(|&&k| g.passes(k)).count();
             if passing == 4 {
-                let w = quad.map(|k| g.weight[k] as f64);
-                inner += (2.0 * (w[0] + w[2]) + w[1] + w[3]) / 3.0;
+                inner += inner_cell(g, quad);
             } else if passing > 0 {
                 let x0 = g.rect.x0 + cw * i as f64;
                 let y0 = g.rect.y0 + ch * j as f64;
@@ -321,6 +318,13 @@ pub fn edge_refined_flux(
         }
     }
     inner * 0.5 * g.cell_area() * theta.cos() + edge
+}
+
+/// A cell wholly inside the passing region (corners `quad`, in order round it): the sum of
+/// its two triangles' mean weights, each triangle half the cell.
+fn inner_cell(g: &GridTrace, quad: [usize; 4]) -> f64 {
+    let w = quad.map(|k| g.weight[k] as f64);
+    (2.0 * (w[0] + w[2]) + w[1] + w[3]) / 3.0
 }
 
 /// The mean over a triangle of `w · [e ≤ 0]`, with `e` and `w` linear over it (given at its
