@@ -67,11 +67,32 @@ pub enum Coverage {
     /// vertices, so triangles sharing an edge cover every pixel centre along it exactly
     /// once: a closed mesh adds its shade once per pixel, as exact coverage would in its
     /// interior). Smaller triangles — a mesh's folds, caustics, the diffraction-sized ones —
-    /// keep exact coverage, where a sample could miss them or count them whole. Energy is
+    /// keep exact coverage, where a sample could miss them or count them whole, and so do
+    /// slivers narrower than [`MIN_SAMPLED_WIDTH`] (a caustic's cell drawn as a line across
+    /// the frame: its samples would fall on a few pixel centres it happens to cross, a
+    /// knife-edge that f32 and f64 positions decide differently). Energy is
     /// then kept up to the sampling of each triangle's outline where no neighbour shares it
     /// (zero-mean, a fraction of a pixel's worth per edge pixel); within a mesh, exactly up
     /// to the interpolated shade.
     Sampled { min_area: f32 },
+}
+
+/// Narrowest a triangle may be (its height over its longest side, pixels) to be point-sampled
+/// under [`Coverage::Sampled`]; the GPU backend's rasterizer (`raster.wgsl`) uses the same.
+pub const MIN_SAMPLED_WIDTH: f64 = 1.0;
+
+/// True when the triangle `p` of `area` pixel² is at least [`MIN_SAMPLED_WIDTH`] across its
+/// longest side.
+fn wide_enough(p: [[f32; 2]; 3], area: f64) -> bool {
+    let edge2 = |a: [f32; 2], b: [f32; 2]| {
+        let (dx, dy) = (f64::from(b[0] - a[0]), f64::from(b[1] - a[1]));
+        dx * dx + dy * dy
+    };
+    let longest2 = edge2(p[0], p[1])
+        .max(edge2(p[1], p[2]))
+        .max(edge2(p[2], p[0]));
+    // Height on the longest side = 2 · area / its length.
+    4.0 * area * area >= MIN_SAMPLED_WIDTH * MIN_SAMPLED_WIDTH * longest2
 }
 
 /// [`rasterize`] with a choice of [`Coverage`].
@@ -253,7 +274,7 @@ pub fn rasterize_shaded_into<const N: usize, S: Shader<N>>(
             let p = tri.map(|i| positions[i as usize]);
             let corners = tri.map(|i| attrs[i as usize]);
             let setup = Setup::new(p, corners, [view.x0 as f64, view.y0 as f64]);
-            if setup.area >= min_area {
+            if setup.area >= min_area && wide_enough(p, setup.area) {
                 sample_in_tile(&mut view, p, &setup, &corners, shader);
             } else {
                 rasterize_in_tile(&mut view, &setup, shader, &mut scratch);

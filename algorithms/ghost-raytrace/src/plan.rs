@@ -24,7 +24,8 @@ use flarebench_sdk::ghost::context::Band;
 use flarebench_sdk::ghost::grid::trace_grid;
 use flarebench_sdk::ghost::table::BoundsTable;
 use flarebench_sdk::ghost::{
-    FourReflectionBounds, GhostPath, GridTrace, Rect, ReflectionOrder, enumerate_ghosts_of_order,
+    FourReflectionBounds, GhostPath, GridTrace, PointTrace, Rect, ReflectionOrder,
+    enumerate_ghosts_of_order,
 };
 use flarebench_sdk::paraxial::stop_opening;
 use flarebench_sdk::trace::InterfaceTableSet;
@@ -481,8 +482,35 @@ impl<'p, 'o> Planner<'p, 'o> {
                 self.bands_for(*path, b, &job, measure)
             })
             .collect();
-        for ((path, b, _), m) in kept.into_iter().zip(bands) {
-            ghosts.push(self.ghost_job(path, b, m, &job, &mut bins));
+        // Each ghost's bands: bins of its own sampling, each traced once per light.
+        let ghost_bins: Vec<Vec<usize>> = bands
+            .iter()
+            .map(|&m| (0..m).map(|i| bins.band(system, m, i)).collect())
+            .collect();
+        let plan_bands = band_tables(system, &bins.bins, opts.exact_tables, opts.lens_tables);
+        // A spectral ghost's rectangles hold its region at its first and last band, not only
+        // at the wavelength its bounds were found at.
+        let widened: Vec<GhostBounds> = kept
+            .par_iter()
+            .zip(&ghost_bins)
+            .map_init(
+                || (GridTrace::default(), PointTrace::default()),
+                |(scratch, probe), ((path, b, _), own)| {
+                    let ends = match own.as_slice() {
+                        [first, .., last] => [*first, *last],
+                        _ => return *b,
+                    };
+                    ends.iter().fold(*b, |b, &band| {
+                        bounds::ghost_sequence(system, *path, &plan_bands[band].tables)
+                            .map_or(b, |seq| {
+                                bounds::widened_for(system, &seq, job.theta, &b, scratch, probe)
+                            })
+                    })
+                },
+            )
+            .collect();
+        for (((path, _, _), b), own) in kept.into_iter().zip(widened).zip(ghost_bins) {
+            ghosts.push(self.ghost_job(path, b, &own, &job, &bins));
         }
         // A four-reflection ghost's bound is all its energy might be, on the frame or not.
         culled_visible += bounded_out.iter().map(|d| d.energy_share).sum::<f64>();
@@ -490,7 +518,7 @@ impl<'p, 'o> Planner<'p, 'o> {
         dropped.extend(bounded_out);
         Ok(LightPlan {
             light: light.clone(),
-            bands: band_tables(system, &bins.bins, opts.exact_tables, opts.lens_tables),
+            bands: plan_bands,
             sampled: opts.bands,
             ghosts,
             dropped,
@@ -646,27 +674,25 @@ impl<'p, 'o> Planner<'p, 'o> {
         }
     }
 
-    /// A kept ghost's job: its grid, coarse factor, `groups` bands and their colours.
+    /// A kept ghost's job: its grid, coarse factor, its bands (`own`: indices into `bins`,
+    /// the bins of its own sampling) and their colours.
     fn ghost_job(
         &self,
         path: GhostPath,
         b: GhostBounds,
-        groups: usize,
+        own: &[usize],
         job: &LightJob,
-        bins: &mut Bins,
+        bins: &Bins,
     ) -> GhostJob {
-        let system = self.system;
         let (grid, downscale) = self.grid_and_downscale(&b);
-        // The ghost's own sampling: `groups` equal bins, each traced at its centre in the colour
-        // of its whole bin. (Grouping the light's bands unevenly instead — 31 into 16, say —
-        // draws copies of uneven weight and spacing.)
-        let ghost_bands = (0..groups)
-            .map(|i| {
-                let band = bins.band(system, groups, i);
-                GhostBand {
-                    band,
-                    rgb: job.colours.bin_colour(path, &bins.bins[band]),
-                }
+        // The ghost's own sampling: equal bins, each traced at its centre in the colour of its
+        // whole bin. (Grouping the light's bands unevenly instead — 31 into 16, say — draws
+        // copies of uneven weight and spacing.)
+        let ghost_bands = own
+            .iter()
+            .map(|&band| GhostBand {
+                band,
+                rgb: job.colours.bin_colour(path, &bins.bins[band]),
             })
             .collect();
         GhostJob {

@@ -57,6 +57,50 @@ pub fn trace_grid(
     out.batch = batch;
 }
 
+/// Collimated rays from chosen points of the entrance plane, traced along one path on the
+/// calling thread: whether each reached the sensor inside every aperture (the checks
+/// [`super::bounds::widened_for`] makes along a rectangle's border).
+#[derive(Clone, Debug, Default)]
+pub struct PointTrace {
+    /// Largest r / semi-diameter along the path (> 1: clipped somewhere); NaN for a ray that
+    /// stopped (missed a surface, total internal reflection).
+    pub max_rel: Vec<f32>,
+    batch: RayBatch<f32>,
+}
+
+impl PointTrace {
+    /// True when ray `k` reached the sensor inside every aperture.
+    pub fn passes(&self, k: usize) -> bool {
+        self.max_rel[k] <= 1.0
+    }
+
+    /// Traces a ray at `theta` (radians, in the y–z plane) from each of `points` (entrance
+    /// plane, mm) through `seq`, replacing the previous results (buffers are reused).
+    pub fn trace(
+        &mut self,
+        seq: &Sequence<f32>,
+        theta: f64,
+        points: impl IntoIterator<Item = [f64; 2]>,
+    ) {
+        let (s, c) = theta.sin_cos();
+        let dir = [0.0, s as f32, c as f32];
+        self.batch.clear();
+        for [x, y] in points {
+            self.batch.push([x as f32, y as f32, 0.0], dir);
+        }
+        seq.trace_batch_serial(&mut self.batch);
+        self.max_rel.clear();
+        self.max_rel.extend((0..self.batch.len()).map(|i| {
+            let (_, _, _, rel) = self.batch.get(i);
+            if self.batch.completed(i) {
+                rel
+            } else {
+                f32::NAN
+            }
+        }));
+    }
+}
+
 /// [`trace_grid`] with the rays traced in f64 (the results are stored in f32 as always): the
 /// check on the f32 tracer's images.
 pub fn trace_grid_f64(

@@ -50,4 +50,4 @@ pub use enumerate::{
     enumerate_ghosts, enumerate_ghosts_of_order, four_reflection_count, reflecting_surfaces,
 };
 pub use four_bound::FourReflectionBounds;
-pub use grid::{GridTrace, ProbedGrid, trace_grid, trace_grid_f64, trace_grid_probed};
+pub use grid::{GridTrace, PointTrace, ProbedGrid, trace_grid, trace_grid_f64, trace_grid_probed};

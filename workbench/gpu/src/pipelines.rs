@@ -317,3 +317,19 @@ fn raster_pipeline(
         cache: None,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    /// The WGSL rasterizer samples the same triangles as the CPU's (`Coverage::Sampled`).
+    #[test]
+    fn the_shader_s_narrowest_sampled_triangle_is_the_cpu_s() {
+        let want = format!(
+            "const MIN_SAMPLED_WIDTH: f32 = {:?};",
+            flarebench_sdk::raster::MIN_SAMPLED_WIDTH as f32
+        );
+        assert!(
+            super::RASTER_WGSL.contains(&want),
+            "raster.wgsl lacks `{want}`"
+        );
+    }
+}

@@ -1,7 +1,8 @@
 // Ghost triangles drawn into a level's linear HDR target with additive blending, as the CPU
 // rasterizer draws them (flarebench_sdk::raster, Coverage::Sampled): a triangle of at least
-// `min_area` pixels² is point-sampled at pixel centres, shaded with its attributes
-// interpolated there; a smaller one (folds, caustics) adds to each pixel it overlaps the
+// `min_area` pixels², and at least MIN_SAMPLED_WIDTH across its longest side, is point-sampled
+// at pixel centres, shaded with its attributes interpolated there; a smaller one (folds,
+// caustics, slivers) adds to each pixel it overlaps the
 // exact area of the pixel square it covers times the shade at that covered piece's centroid.
 //
 // Triangles are pulled from storage buffers (three corners each, `ATTRS` floats per corner);
@@ -9,6 +10,10 @@
 // one when it is large, the two halves of its bounding box in whole pixels when it is small.
 
 override ATTRS: u32 = 3u;
+
+// Narrowest a triangle may be (its height over its longest side, pixels) to be point-sampled:
+// flarebench_sdk::raster::MIN_SAMPLED_WIDTH.
+const MIN_SAMPLED_WIDTH: f32 = 1.0;
 
 struct Level {
     // The level's frame in pixels.
@@ -84,7 +89,9 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) t: u32) -> V
     let e1 = p1 - p0;
     let e2 = p2 - p0;
     let area = 0.5 * abs(e1.x * e2.y - e2.x * e1.y);
-    if area >= level.min_area {
+    let e3 = p2 - p1;
+    let longest2 = max(max(dot(e1, e1), dot(e2, e2)), dot(e3, e3));
+    if area >= level.min_area && 4.0 * area * area >= MIN_SAMPLED_WIDTH * MIN_SAMPLED_WIDTH * longest2 {
         if vi < 3u {
             out.pos = to_clip(corner(t, vi));
             let a = corner_attrs(t, vi);
