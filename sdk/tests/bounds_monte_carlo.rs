@@ -150,25 +150,7 @@ fn heliar_ghost_8_0_at_10_degrees_is_bounded_around_every_ray_that_carries_it() 
     let path: GhostPath = "8-0".parse().expect("a ghost name");
     let theta = 10f64.to_radians();
     let b = l.bounds(path, theta).expect("8-0 has light at 10°");
-    let frame = Frame::across_film(64, 36, l.sys.film_width_mm);
-    let band = [McBand {
-        lambda_nm: 550.0,
-        rgb: [1.0; 3],
-    }];
-    let g = ghost_monte_carlo(
-        &l.sys,
-        &Aperture::Circular,
-        &frame,
-        path,
-        (theta, 0.0, 1.0),
-        &band,
-        &settings(),
-        None,
-    )
-    .expect("a ghost path");
-    let span = g
-        .entrance_span
-        .expect("the Monte-Carlo rays reach the sensor");
+    let span = entrance_span(&l, path, theta, 550.0);
     // Its rays span x = ±0.47 mm; the bounds held ±0.32 mm before the fix.
     let e = b.entrance;
     assert!(

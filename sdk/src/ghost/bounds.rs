@@ -657,12 +657,16 @@ fn border_reach(
         ]
     };
     // Round the border: along the bottom, up the right, back along the top, down the left.
-    let ring: Vec<(usize, usize)> = (0..n - 1)
-        .map(|i| (i, 0))
-        .chain((0..n - 1).map(|j| (n - 1, j)))
-        .chain((1..n).rev().map(|i| (i, n - 1)))
-        .chain((1..n).rev().map(|j| (0, j)))
-        .collect();
+    let len = 4 * (n - 1);
+    let ring = |k: usize| {
+        let (side, t) = ((k % len) / (n - 1), k % (n - 1));
+        match side {
+            0 => (t, 0),
+            1 => (n - 1, t),
+            2 => (n - 1 - t, n - 1),
+            _ => (0, n - 1 - t),
+        }
+    };
     let m = (INNER_PROBE - 1) as f64;
     let inside = (1..INNER_PROBE - 1)
         .flat_map(|j| (1..INNER_PROBE - 1).map(move |i| (i, j)))
@@ -671,13 +675,12 @@ fn border_reach(
     probe.trace(
         seq,
         theta,
-        ring.iter().map(|&(i, j)| at(i, j, d)).chain(inside),
+        (0..len).map(&ring).map(|(i, j)| at(i, j, d)).chain(inside),
     );
-    let len = ring.len();
     let e = |k: usize| probe.max_rel[k % len] - 1.0;
     let mut sides = [false; 4];
     let mut mark = |k: usize| {
-        let (i, j) = ring[k % len];
+        let (i, j) = ring(k);
         sides[0] |= i == 0;
         sides[1] |= j == 0;
         sides[2] |= i == n - 1;
