@@ -17,7 +17,7 @@
 //! convex opening the integral of `T` is the open area plus `(2π + 2Σ tan(θᵢ/2))·feather²/80`
 //! (θᵢ the exterior angles of its corners; `π·feather²/20` for the circle) — relative 1e-5 at
 //! a feather of 1/64. The ghost renderer feathers over about one output pixel
-//! (`ghost::triangles::feather_width`).
+//! (`ghost::triangles::edge_feathers`).
 //!
 //! **Dust and scratches** are not part of the opening: they are an optional overlay, an
 //! [`ApertureMask`] over the same square whose transmission multiplies the opening's at the

@@ -61,8 +61,9 @@ pub const REFERENCE_GRID_SCALE: f64 = 10.0;
 /// for ghosts whose edge cells carry much of their light (`bounds::grid_for_edges`). 7: ghosts
 /// whose search rays all stop found from their paraxial entrance rectangle, and smaller entry
 /// regions zoomed into (`bounds::paraxial_seed`, `zoom`). 8: a spectral ghost's rectangle
-/// holds its region at its first and last band (`bounds::widened_for`).
-pub const REFERENCE_VERSION: u32 = 8;
+/// holds its region at its first and last band (`bounds::widened_for`). 9: every edge
+/// feathered over one drawn pixel along its own gradient (`triangles::edge_feathers`).
+pub const REFERENCE_VERSION: u32 = 9;
 
 /// A text naming everything the reference image depends on: the renderer's version and
 /// settings, the reflection order, the lens (fingerprint of its canonical XML), the aperture, the frame and every

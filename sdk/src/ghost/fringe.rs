@@ -680,7 +680,7 @@ pub fn mesh_ghost_fringed(
     let emits: Vec<BandTriangles<'_>> = bands
         .iter()
         .zip(grids.iter())
-        .map(|(band, grid)| BandTriangles::new(ctx, bounds, n, light, band, &sampler, grid))
+        .map(|(band, grid)| BandTriangles::new(ctx, n, light, band, &sampler, grid))
         .collect();
     let per_band = |tri: [usize; 3], mesh: &mut GhostMesh, stats: &mut GhostStats| {
         for emit in &emits {
@@ -794,9 +794,8 @@ struct Fringer<'e, 'a> {
     model: LineFit<'e>,
     /// Index of the ghost's table in [`GhostMesh::fringe_tables`].
     id: f32,
-    feather: f32,
-    /// Largest distance of a band's value from its line on an edge (a quarter feather).
-    tolerance: f64,
+    /// The widest feather of the ghost's triangles ([`super::triangles::max_feather`]).
+    max_feather: f32,
     /// The largest of the bands' smallest triangle areas (the Airy disc, mm²).
     min_area: f64,
     /// Grid vertices per band.
@@ -821,7 +820,6 @@ impl<'e, 'a> Fringer<'e, 'a> {
         (circle, sampler): (bool, &'e ApertureSampler<'e>),
     ) -> Self {
         let m = emits.len();
-        let feather = emits[0].feather;
         let vertices = n * n;
         let mut sensor = Vec::with_capacity(m * vertices);
         let mut radius_uv = Vec::with_capacity(m * vertices);
@@ -843,8 +841,7 @@ impl<'e, 'a> Fringer<'e, 'a> {
             sampler,
             model: LineFit::new(centres),
             id,
-            feather,
-            tolerance: 0.25 * f64::from(feather),
+            max_feather: emits[0].max_feather,
             min_area: emits.iter().fold(0.0_f64, |a, e| a.max(e.min_area)),
             vertices,
             sensor,
@@ -869,21 +866,25 @@ impl<'e, 'a> Fringer<'e, 'a> {
         stats: &mut GhostStats,
     ) -> Fringed {
         let emits = self.emits;
-        let feather = self.feather;
         let all_done = emits
             .iter()
             .all(|e| tri.iter().all(|&k| e.grid.completed[k]));
         if !all_done {
             return Fringed::Failed;
         }
-        if emits
-            .iter()
-            .all(|e| tri.iter().all(|&k| e.grid.max_rel[k] > 1.0 + feather))
-        {
+        if emits.iter().all(|e| {
+            tri.iter()
+                .all(|&k| e.grid.max_rel[k] > 1.0 + self.max_feather)
+        }) {
             return Fringed::Clipped;
         }
         let Some(mean) = self.mean_triangle(tri) else {
-            return Fringed::Failed;
+            // Beyond every band's clip by its own triangle's feather, as band by band.
+            return if self.clipped_per_band(tri) {
+                Fringed::Clipped
+            } else {
+                Fringed::Failed
+            };
         };
         self.extend_to(tri, &mean);
         let (fits, residuals) = self.model.fit_all(&self.values);
@@ -895,10 +896,24 @@ impl<'e, 'a> Fringer<'e, 'a> {
                 residual[x] = residual[x].max(residuals[3 * c + x]);
             }
         }
-        // Open when, at both ends of τ, every corner is within the clip and the (convex)
-        // stop by half a feather: the radius is linear and the disc convex, so it is between.
-        let inner = 1.0 - 0.5 * f64::from(feather);
         let end = |line: [f64; 2], t: f64| line[0] + t * line[1];
+        // The feathers from the mean triangle's values at the middle of τ.
+        let feathers = emits[0].feathers(
+            mean,
+            lines.map(|l| end(l[0], 0.5)),
+            lines.map(|l| [end(l[1], 0.5), end(l[2], 0.5)]),
+        );
+        if emits
+            .iter()
+            .all(|e| tri.iter().all(|&k| e.grid.max_rel[k] > 1.0 + feathers.clip))
+        {
+            return Fringed::Clipped;
+        }
+        let wide = feathers.widest();
+        // Open when, at both ends of τ, every corner is within the clip and the (convex)
+        // stop by half the wider feather: the radius is linear and the disc convex, so it is
+        // between.
+        let inner = 1.0 - 0.5 * f64::from(wide);
         let radius_open = lines
             .iter()
             .all(|l| end(l[0], 0.0) <= inner && end(l[0], 1.0) <= inner);
@@ -906,7 +921,7 @@ impl<'e, 'a> Fringer<'e, 'a> {
             lines.iter().all(|l| {
                 [0.0, 1.0].iter().all(|&t| {
                     let uv = [end(l[1], t) as f32, end(l[2], t) as f32];
-                    emits[0].inside_aperture(uv)
+                    emits[0].inside_aperture(uv, wide)
                 })
             })
         };
@@ -931,7 +946,7 @@ impl<'e, 'a> Fringer<'e, 'a> {
                 .fold(0.0_f64, f64::max);
             let uniform =
                 self.sampler
-                    .uniform_around(c[0] as f32, c[1] as f32, radius as f32, feather);
+                    .uniform_around(c[0] as f32, c[1] as f32, radius as f32, wide);
             let open = if self.convex {
                 inside_at_ends()
             } else {
@@ -941,9 +956,12 @@ impl<'e, 'a> Fringer<'e, 'a> {
         };
         // Where an edge crosses the triangle, the bands' values there must follow their lines
         // (the stop's only where its outline is drawn); inside, the mean triangle is all.
+        // (within a quarter of the feather drawn: a quarter pixel on the image).
         let open = radius_open && stop_open;
-        let follows = residual[0] <= self.tolerance
-            && (stop_open || (residual[1] <= self.tolerance && residual[2] <= self.tolerance));
+        let feather = feathers.drawn(radius_open, stop_open);
+        let tolerance = 0.25 * f64::from(feather);
+        let follows = residual[0] <= tolerance
+            && (stop_open || (residual[1] <= tolerance && residual[2] <= tolerance));
         if !open && !follows {
             return Fringed::Failed;
         }
@@ -988,6 +1006,19 @@ impl<'e, 'a> Fringer<'e, 'a> {
             mesh.fringe.push(pixels, [corner(0), corner(1), corner(2)]);
         }
         Fringed::Drawn
+    }
+
+    /// True when every band's triangle `tri` is beyond its clip radius by its own feather
+    /// (where [`BandTriangles`] leaves it out).
+    fn clipped_per_band(&self, tri: [usize; 3]) -> bool {
+        self.emits.iter().enumerate().all(|(b, e)| {
+            let at = tri.map(|k| self.radius_uv[b * self.vertices + k]);
+            let r = at.map(|x| x[0]);
+            let clip = e
+                .feathers(self.corners(b, tri), r, at.map(|x| [x[1], x[2]]))
+                .clip;
+            r.iter().all(|&x| x > 1.0 + f64::from(clip))
+        })
     }
 
     /// The mean of the bands' triangles `tri`, each band's area kept in `areas`; `None` when

@@ -72,7 +72,7 @@ pub fn mesh_ghost(
             return stats;
         }
         stats.rays += n * n;
-        let emit = BandTriangles::new(ctx, bounds, n, light, band, &aperture, grid);
+        let emit = BandTriangles::new(ctx, n, light, band, &aperture, grid);
         for tri in grid_triangles(n) {
             emit.push(tri, mesh, &mut stats);
         }

@@ -2,7 +2,7 @@
 //! [`grid_triangles`] lists the grid's cells as triangles, and [`BandTriangles`] makes each
 //! into a mesh triangle — its flux `E · A_entrance · cos θ` over its area on the sensor, grown to
 //! the Airy disc `π (1.22 λ N)²` where it collapses (a caustic), wholly open or on an edge
-//! feathered over [`feather_width`].
+//! feathered over one drawn pixel ([`edge_feathers`]).
 
 use crate::aperture::ApertureSampler;
 use crate::frame::Frame;
@@ -62,7 +62,8 @@ pub(crate) struct BandTriangles<'a> {
     pub grid: &'a GridTrace,
     frame: Frame,
     px_area: f64,
-    pub feather: f32,
+    /// The widest feather an edge may have ([`max_feather`]).
+    pub max_feather: f32,
     /// Smallest sensor area a triangle may have (the Airy disc, mm²) and the Airy radius.
     pub min_area: f64,
     airy: f64,
@@ -79,7 +80,6 @@ pub(crate) struct BandTriangles<'a> {
 impl<'a> BandTriangles<'a> {
     pub(crate) fn new(
         ctx: &GhostContext<'_>,
-        bounds: &GhostBounds,
         n: usize,
         light: &GhostLight,
         band: &BandRef<'_>,
@@ -93,7 +93,7 @@ impl<'a> BandTriangles<'a> {
             grid,
             frame,
             px_area: frame.pixel_area_mm2(),
-            feather: feather_width(bounds, n, &frame),
+            max_feather: max_feather(n),
             min_area: std::f64::consts::PI * airy * airy,
             airy,
             half_cell: 0.5 * grid.cell_area() * light.theta.cos(),
@@ -142,16 +142,29 @@ impl<'a> BandTriangles<'a> {
         self.frame.to_pixel(q[0], q[1])
     }
 
-    /// True when a convex aperture holds the stop point `uv` by half a feather.
+    /// True when a convex aperture holds the stop point `uv` by half of `feather`.
     #[inline]
-    pub(crate) fn inside_aperture(&self, uv: [f32; 2]) -> bool {
-        self.convex && self.aperture.signed_distance(uv[0], uv[1]) <= -0.5 * self.feather
+    pub(crate) fn inside_aperture(&self, uv: [f32; 2], feather: f32) -> bool {
+        self.convex && self.aperture.signed_distance(uv[0], uv[1]) <= -0.5 * feather
     }
 
-    /// True when the aperture is open (its soft transmission 1) all over the triangle of stop
-    /// crossings `uv` (within the disc about its centroid through its farthest corner).
+    /// The feathers of a triangle with sensor corners `p` (mm, the lens's frame), clip radii
+    /// `r` and stop crossings `uv` ([`edge_feathers`] at this frame's pixel size).
     #[inline]
-    fn open_around(&self, uv: [[f32; 2]; 3]) -> bool {
+    pub(crate) fn feathers(
+        &self,
+        p: [[f64; 2]; 3],
+        r: [f64; 3],
+        uv: [[f64; 2]; 3],
+    ) -> EdgeFeathers {
+        edge_feathers(p, r, uv, self.frame.pixel_mm(), f64::from(self.max_feather))
+    }
+
+    /// True when the aperture is open (its soft transmission over `feather` 1) all over the
+    /// triangle of stop crossings `uv` (within the disc about its centroid through its
+    /// farthest corner).
+    #[inline]
+    fn open_around(&self, uv: [[f32; 2]; 3], feather: f32) -> bool {
         let c = [
             (uv[0][0] + uv[1][0] + uv[2][0]) / 3.0,
             (uv[0][1] + uv[1][1] + uv[2][1]) / 3.0,
@@ -160,9 +173,7 @@ impl<'a> BandTriangles<'a> {
             .iter()
             .map(|p| (p[0] - c[0]).hypot(p[1] - c[1]))
             .fold(0.0_f32, f32::max);
-        self.aperture
-            .uniform_around(c[0], c[1], radius, self.feather)
-            == Some(1.0)
+        self.aperture.uniform_around(c[0], c[1], radius, feather) == Some(1.0)
     }
 
     /// Adds grid triangle `tri` to `mesh` (wholly open, or on an edge) and counts it and its
@@ -178,12 +189,13 @@ impl<'a> BandTriangles<'a> {
     /// [`BandTriangles::push`] without the counting: the triangle's flux, or `None`.
     fn triangle(&self, tri: [usize; 3], mesh: &mut GhostMesh) -> Option<f64> {
         let g = self.grid;
-        let feather = self.feather;
         if !tri.iter().all(|&k| g.completed[k]) {
             return None;
         }
-        // Fully clipped triangles add nothing.
-        if tri.iter().all(|&k| g.max_rel[k] > 1.0 + feather) {
+        // Fully clipped triangles add nothing (first against the widest feather, which needs
+        // no corners on the sensor).
+        let r = tri.map(|k| f64::from(g.max_rel[k]));
+        if r.iter().all(|&x| x > 1.0 + f64::from(self.max_feather)) {
             return None;
         }
         let mut p = tri.map(|k| self.sensor(k));
@@ -213,6 +225,11 @@ impl<'a> BandTriangles<'a> {
             p = [[c[0] - r, c[1] - r], [c[0] + r, c[1] - r], [c[0], c[1] + r]];
             2.0 * r * r
         };
+        let uv = tri.map(|k| self.stop_uv(k));
+        let feathers = self.feathers(p, r, uv.map(|q| q.map(f64::from)));
+        if r.iter().all(|&x| x > 1.0 + f64::from(feathers.clip)) {
+            return None;
+        }
         let irr = self.irradiance_over(area) as f32;
         let pixels = p.map(|q| self.to_pixel(q));
         let rgb = self.rgb;
@@ -220,25 +237,27 @@ impl<'a> BandTriangles<'a> {
             let e = irr * g.weight[k];
             [rgb[0] * e, rgb[1] * e, rgb[2] * e]
         };
-        // Inside the clip radius, and (for a convex opening) inside the aperture, by half a
-        // feather at every corner — so everywhere inside; for a mask, open all around the
-        // stop crossings' triangle (the disc about its centroid through its corners).
-        let radius_open = tri.iter().all(|&k| g.max_rel[k] <= 1.0 - 0.5 * feather);
+        // Inside the clip radius, and (for a convex opening) inside the aperture, by half the
+        // wider feather at every corner — so everywhere inside; for a mask, open all around
+        // the stop crossings' triangle (the disc about its centroid through its corners).
+        let wide = feathers.widest();
+        let radius_open = r.iter().all(|&x| x <= 1.0 - 0.5 * f64::from(wide));
         let aperture_open = if self.convex {
-            tri.iter().all(|&k| self.inside_aperture(self.stop_uv(k)))
+            uv.iter().all(|&q| self.inside_aperture(q, wide))
         } else {
-            radius_open && self.open_around(tri.map(|k| self.stop_uv(k)))
+            radius_open && self.open_around(uv, wide)
         };
         if radius_open && aperture_open {
             mesh.open.push(pixels, tri.map(colour));
         } else {
             let flag = if aperture_open { 0.0 } else { 1.0 };
+            let feather = feathers.drawn(radius_open, aperture_open);
             mesh.edge.push(
                 pixels,
-                tri.map(|k| {
-                    let [r, gr, b] = colour(k);
-                    let [u, v] = self.stop_uv(k);
-                    [r, gr, b, u, v, g.max_rel[k], feather, flag]
+                std::array::from_fn(|c| {
+                    let [red, green, blue] = colour(tri[c]);
+                    let [u, v] = uv[c];
+                    [red, green, blue, u, v, r[c] as f32, feather, flag]
                 }),
             );
         }
@@ -246,22 +265,135 @@ impl<'a> BandTriangles<'a> {
     }
 }
 
-/// Width of the ghost's edge (the clip at relative radius 1 and the aperture's outline), in
-/// units of the relative radius at the stop: [`EDGE_PIXELS`] pixels of `frame` on the ghost's
-/// image (whose radius on the sensor, relative radius 1, is half its sensor extent), but never
-/// wider than two grid cells (`2/(n − 1)`, where the interpolated radius stops resolving the
-/// edge) nor narrower than 1e-4.
-pub fn feather_width(bounds: &GhostBounds, n: usize, frame: &Frame) -> f32 {
-    let s = &bounds.sensor;
-    let radius_px = 0.5 * (s.x1 - s.x0).max(s.y1 - s.y0) / frame.pixel_mm();
-    let cells = 2.0 / (n.max(2) - 1) as f64;
-    let f = if radius_px > 0.0 {
-        (EDGE_PIXELS / radius_px).min(cells)
-    } else {
-        cells
-    };
-    f.max(1e-4) as f32
+/// A triangle's two feathers, in the relative units their edges are drawn in: the clip
+/// radius's (relative radius 1) and the aperture outline's (normalised stop units).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EdgeFeathers {
+    pub clip: f32,
+    pub stop: f32,
 }
+
+impl EdgeFeathers {
+    /// The wider of the two: the margin within which a triangle's corners must be inside
+    /// both edges for it to be drawn wholly open.
+    pub fn widest(self) -> f32 {
+        self.clip.max(self.stop)
+    }
+
+    /// The feather a triangle on an edge is drawn with (one attribute serves both edges):
+    /// the aperture's where the clip radius is open across it, the clip's where the aperture
+    /// is, else the narrower, so neither edge is drawn wider than [`EDGE_PIXELS`].
+    pub fn drawn(self, radius_open: bool, aperture_open: bool) -> f32 {
+        if radius_open {
+            self.stop
+        } else if aperture_open {
+            self.clip
+        } else {
+            self.clip.min(self.stop)
+        }
+    }
+}
+
+/// The feathers of a triangle with corners `p` on the sensor (mm), clip radii `r` and stop
+/// crossings `uv` (normalised), drawn on pixels `pixel_mm` wide: each the change of its value
+/// over [`EDGE_PIXELS`] pixels along its own gradient — the clip radius's, and for the
+/// aperture that of `|(u, v)|` at the centroid's crossing (the outline's normal on the
+/// circle) — so each edge is one drawn pixel wide however fast or slowly its value moves.
+/// Each lies between [`MIN_FEATHER`] and `max` (a degenerate triangle gets `max`).
+pub fn edge_feathers(
+    p: [[f64; 2]; 3],
+    r: [f64; 3],
+    uv: [[f64; 2]; 3],
+    pixel_mm: f64,
+    max: f64,
+) -> EdgeFeathers {
+    let clamp = |slope: f64| -> f32 {
+        let f = slope * pixel_mm * EDGE_PIXELS;
+        if f.is_finite() {
+            f.clamp(MIN_FEATHER, max.max(MIN_FEATHER)) as f32
+        } else {
+            max.max(MIN_FEATHER) as f32
+        }
+    };
+    let e1 = [p[1][0] - p[0][0], p[1][1] - p[0][1]];
+    let e2 = [p[2][0] - p[0][0], p[2][1] - p[0][1]];
+    let det = e1[0] * e2[1] - e1[1] * e2[0];
+    // The gradient of the linear interpolant of `v` over the triangle (per mm).
+    let gradient = |v: [f64; 3]| -> [f64; 2] {
+        let (d1, d2) = (v[1] - v[0], v[2] - v[0]);
+        [
+            (d1 * e2[1] - d2 * e1[1]) / det,
+            (d2 * e1[0] - d1 * e2[0]) / det,
+        ]
+    };
+    let gr = gradient(r);
+    let gu = gradient(uv.map(|q| q[0]));
+    let gv = gradient(uv.map(|q| q[1]));
+    let cu = (uv[0][0] + uv[1][0] + uv[2][0]) / 3.0;
+    let cv = (uv[0][1] + uv[1][1] + uv[2][1]) / 3.0;
+    let cr = cu.hypot(cv);
+    let stop_slope = if cr > 1e-9 {
+        let (nu, nv) = (cu / cr, cv / cr);
+        (nu * gu[0] + nv * gv[0]).hypot(nu * gu[1] + nv * gv[1])
+    } else {
+        gu[0].hypot(gu[1]).max(gv[0].hypot(gv[1]))
+    };
+    EdgeFeathers {
+        clip: clamp(gr[0].hypot(gr[1])),
+        stop: clamp(stop_slope),
+    }
+}
+
+/// The widest feather of an `n × n` grid's triangles, in relative units: two grid cells
+/// (`2/(n − 1)`), beyond which the interpolated radius stops resolving the edge.
+pub fn max_feather(n: usize) -> f32 {
+    (2.0 / (n.max(2) - 1) as f64) as f32
+}
+
+/// The narrowest feather (relative units): an edge whose value hardly moves is drawn this
+/// sharp rather than sharper than f32 attributes resolve.
+pub const MIN_FEATHER: f64 = 1e-4;
 
 /// Width of a ghost's edge on the image, in pixels of the frame it is drawn into.
 pub const EDGE_PIXELS: f64 = 1.0;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A right triangle 0.1 mm a side at the origin, drawn on pixels 0.01 mm wide.
+    const P: [[f64; 2]; 3] = [[0.0, 0.0], [0.1, 0.0], [0.0, 0.1]];
+    const PIXEL_MM: f64 = 0.01;
+
+    #[test]
+    fn each_edge_is_one_drawn_pixel_wide_along_its_own_gradient() {
+        // Clip radius rising 0.3 per mm along (3, 4)/5: 0.003 over a pixel.
+        let r = P.map(|q| 0.99 + 0.3 * (0.6 * q[0] + 0.8 * q[1]));
+        // Stop crossings about (0.9, 0) moving 2 per mm in u along y, 0.5 per mm in v along
+        // x: at the centroid's crossing (on the u axis) |(u, v)| moves as u, 0.02 a pixel.
+        let uv = P.map(|q| [0.9 + 2.0 * q[1], 0.5 * q[0] - 0.5 * 0.1 / 3.0]);
+        let f = edge_feathers(P, r, uv, PIXEL_MM, 0.1);
+        assert!((f64::from(f.clip) - 0.003).abs() < 1e-7, "{f:?}");
+        assert!((f64::from(f.stop) - 0.02).abs() < 1e-6, "{f:?}");
+        assert_eq!(f.widest(), f.stop);
+        assert_eq!(f.drawn(true, false), f.stop);
+        assert_eq!(f.drawn(false, true), f.clip);
+        assert_eq!(f.drawn(false, false), f.clip);
+    }
+
+    #[test]
+    fn feathers_stay_between_their_floor_and_two_cells() {
+        // A radius that does not move: the floor, however wide the triangle.
+        let flat = edge_feathers(P, [1.0; 3], [[0.5, 0.0]; 3], PIXEL_MM, 0.04);
+        assert_eq!(flat.clip, MIN_FEATHER as f32);
+        assert_eq!(flat.stop, MIN_FEATHER as f32);
+        // One moving by 1 over a pixel: two cells of a 51² grid.
+        let steep = edge_feathers(P, [0.0, 10.0, 0.0], [[0.0; 2]; 3], PIXEL_MM, 0.04);
+        assert_eq!(steep.clip, 0.04);
+        assert_eq!(max_feather(51), 0.04);
+        // A triangle of no area: the widest.
+        let line = [[0.0, 0.0], [0.1, 0.0], [0.2, 0.0]];
+        let d = edge_feathers(line, [0.9, 1.0, 1.1], [[0.0; 2]; 3], PIXEL_MM, 0.04);
+        assert_eq!((d.clip, d.stop), (0.04, 0.04));
+    }
+}

@@ -13,7 +13,7 @@
 use flarebench_sdk::LensSystem;
 use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::frame::Frame;
-use flarebench_sdk::ghost::triangles::feather_width;
+use flarebench_sdk::ghost::triangles::{edge_feathers, max_feather};
 use flarebench_sdk::ghost::{GhostPath, GridTrace, Rect, trace_grid};
 use flarebench_sdk::paraxial::{analyse, stop_opening};
 use flarebench_sdk::spectrum::LAMBDA_D_NM;
@@ -231,7 +231,7 @@ pub fn compute(
         .collect();
 
     // The renderer's triangles (`BandTriangles` in flarebench_sdk::ghost::triangles).
-    let feather = f64::from(feather_width(&job.bounds, n, &frame));
+    let widest = f64::from(max_feather(n));
     let airy = 1.22 * band.lambda_nm * 1e-6 * f_number;
     let min_area = std::f64::consts::PI * airy * airy;
     let half_cell = 0.5 * grid.cell_area() * theta.cos();
@@ -245,10 +245,8 @@ pub fn compute(
             if !tri.iter().all(|&k| grid.completed[k]) {
                 continue;
             }
-            if tri
-                .iter()
-                .all(|&k| f64::from(grid.max_rel[k]) > 1.0 + feather)
-            {
+            let radius = tri.map(|k| f64::from(grid.max_rel[k]));
+            if radius.iter().all(|&x| x > 1.0 + widest) {
                 continue;
             }
             let mut p = tri.map(|k| rotate(grid.sensor[k].map(f64::from)));
@@ -283,6 +281,11 @@ pub fn compute(
                 ];
                 2.0 * a * a
             };
+            let uv = tri.map(|k| rotate(grid.stop_uv[k].map(f64::from)));
+            let clip = edge_feathers(p, radius, uv, frame.pixel_mm(), widest).clip;
+            if radius.iter().all(|&x| x > 1.0 + f64::from(clip)) {
+                continue;
+            }
             let weight = tri.iter().map(|&k| f64::from(grid.weight[k])).sum::<f64>() / 3.0;
             triangles.push(DebugTriangle {
                 pixels: p.map(|q| frame.to_pixel(q[0], q[1])),
