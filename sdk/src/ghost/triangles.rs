@@ -206,6 +206,14 @@ impl<'a> BandTriangles<'a> {
         if !area.is_finite() {
             return None;
         }
+        // The feathers from the corners where the rays landed: growing a caustic's triangle
+        // to the Airy disc spreads its light, but does not move what part of its cell passes
+        // (so an edge's share of the cell is the same at any scale of the lens).
+        let uv = tri.map(|k| self.stop_uv(k));
+        let feathers = self.feathers(p, r, uv.map(|q| q.map(f64::from)));
+        if r.iter().all(|&x| x > 1.0 + f64::from(feathers.clip)) {
+            return None;
+        }
         let c = [
             (p[0][0] + p[1][0] + p[2][0]) / 3.0,
             (p[0][1] + p[1][1] + p[2][1]) / 3.0,
@@ -225,11 +233,6 @@ impl<'a> BandTriangles<'a> {
             p = [[c[0] - r, c[1] - r], [c[0] + r, c[1] - r], [c[0], c[1] + r]];
             2.0 * r * r
         };
-        let uv = tri.map(|k| self.stop_uv(k));
-        let feathers = self.feathers(p, r, uv.map(|q| q.map(f64::from)));
-        if r.iter().all(|&x| x > 1.0 + f64::from(feathers.clip)) {
-            return None;
-        }
         let irr = self.irradiance_over(area) as f32;
         let pixels = p.map(|q| self.to_pixel(q));
         let rgb = self.rgb;
@@ -299,7 +302,11 @@ impl EdgeFeathers {
 /// over [`EDGE_PIXELS`] pixels along its own gradient — the clip radius's, and for the
 /// aperture that of `|(u, v)|` at the centroid's crossing (the outline's normal on the
 /// circle) — so each edge is one drawn pixel wide however fast or slowly its value moves.
-/// Each lies between [`MIN_FEATHER`] and `max` (a degenerate triangle gets `max`).
+/// `p` are the corners where the rays landed, before a caustic's triangle is grown to the Airy
+/// disc. Each is at most its value's change over [`MAX_FEATHER_CELLS`] of the grid (twice its
+/// spread over the triangle's corners: where a caustic folds the cell to a point, the edge
+/// is not blurred over more of the entrance than that) and `max`, and at least
+/// [`MIN_FEATHER`].
 pub fn edge_feathers(
     p: [[f64; 2]; 3],
     r: [f64; 3],
@@ -307,12 +314,15 @@ pub fn edge_feathers(
     pixel_mm: f64,
     max: f64,
 ) -> EdgeFeathers {
-    let clamp = |slope: f64| -> f32 {
+    let clamp = |slope: f64, values: [f64; 3]| -> f32 {
+        let lo = values.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let cap = (MAX_FEATHER_CELLS * (hi - lo)).min(max).max(MIN_FEATHER);
         let f = slope * pixel_mm * EDGE_PIXELS;
         if f.is_finite() {
-            f.clamp(MIN_FEATHER, max.max(MIN_FEATHER)) as f32
+            f.clamp(MIN_FEATHER, cap) as f32
         } else {
-            max.max(MIN_FEATHER) as f32
+            cap as f32
         }
     };
     let e1 = [p[1][0] - p[0][0], p[1][1] - p[0][1]];
@@ -332,17 +342,29 @@ pub fn edge_feathers(
     let cu = (uv[0][0] + uv[1][0] + uv[2][0]) / 3.0;
     let cv = (uv[0][1] + uv[1][1] + uv[2][1]) / 3.0;
     let cr = cu.hypot(cv);
-    let stop_slope = if cr > 1e-9 {
+    // The stop's value across the outline: the crossing along the centroid's direction (its
+    // radius, where that is too near the centre to have a direction).
+    let (stop_slope, radial) = if cr > 1e-9 {
         let (nu, nv) = (cu / cr, cv / cr);
-        (nu * gu[0] + nv * gv[0]).hypot(nu * gu[1] + nv * gv[1])
+        (
+            (nu * gu[0] + nv * gv[0]).hypot(nu * gu[1] + nv * gv[1]),
+            uv.map(|q| nu * q[0] + nv * q[1]),
+        )
     } else {
-        gu[0].hypot(gu[1]).max(gv[0].hypot(gv[1]))
+        (
+            gu[0].hypot(gu[1]).max(gv[0].hypot(gv[1])),
+            uv.map(|q| q[0].hypot(q[1])),
+        )
     };
     EdgeFeathers {
-        clip: clamp(gr[0].hypot(gr[1])),
-        stop: clamp(stop_slope),
+        clip: clamp(gr[0].hypot(gr[1]), r),
+        stop: clamp(stop_slope, radial),
     }
 }
+
+/// The most grid cells an edge's feather may span, measured by its value's change across the
+/// triangle (see [`edge_feathers`]).
+pub const MAX_FEATHER_CELLS: f64 = 2.0;
 
 /// The widest feather of an `n × n` grid's triangles, in relative units: two grid cells
 /// (`2/(n − 1)`), beyond which the interpolated radius stops resolving the edge.
@@ -391,9 +413,22 @@ mod tests {
         let steep = edge_feathers(P, [0.0, 10.0, 0.0], [[0.0; 2]; 3], PIXEL_MM, 0.04);
         assert_eq!(steep.clip, 0.04);
         assert_eq!(max_feather(51), 0.04);
-        // A triangle of no area: the widest.
+        // A triangle of no area: as wide as its values' change over two cells allows (the
+        // stop's crossing does not move: the floor).
         let line = [[0.0, 0.0], [0.1, 0.0], [0.2, 0.0]];
         let d = edge_feathers(line, [0.9, 1.0, 1.1], [[0.0; 2]; 3], PIXEL_MM, 0.04);
-        assert_eq!((d.clip, d.stop), (0.04, 0.04));
+        assert_eq!((d.clip, d.stop), (0.04, MIN_FEATHER as f32));
+    }
+
+    #[test]
+    fn a_caustic_s_edge_spans_at_most_two_cells_of_its_grid() {
+        // Folded to a thousandth of a pixel: a pixel of it is far more than the cell's
+        // change, 0.001 in the radius and 0.002 in the crossing.
+        let tiny = P.map(|q| q.map(|x| x * 1e-4));
+        let r = [0.9995, 1.0005, 1.0];
+        let uv = [[0.99, 0.0], [0.991, 0.0], [0.992, 0.0]];
+        let f = edge_feathers(tiny, r, uv, PIXEL_MM, 0.04);
+        assert!((f64::from(f.clip) - 0.002).abs() < 1e-9, "{f:?}");
+        assert!((f64::from(f.stop) - 0.004).abs() < 1e-9, "{f:?}");
     }
 }

@@ -257,6 +257,11 @@ pub fn compute(
             if !area.is_finite() {
                 continue;
             }
+            let uv = tri.map(|k| rotate(grid.stop_uv[k].map(f64::from)));
+            let clip = edge_feathers(p, radius, uv, frame.pixel_mm(), widest).clip;
+            if radius.iter().all(|&x| x > 1.0 + f64::from(clip)) {
+                continue;
+            }
             let centre = [
                 (p[0][0] + p[1][0] + p[2][0]) / 3.0,
                 (p[0][1] + p[1][1] + p[2][1]) / 3.0,
@@ -281,11 +286,6 @@ pub fn compute(
                 ];
                 2.0 * a * a
             };
-            let uv = tri.map(|k| rotate(grid.stop_uv[k].map(f64::from)));
-            let clip = edge_feathers(p, radius, uv, frame.pixel_mm(), widest).clip;
-            if radius.iter().all(|&x| x > 1.0 + f64::from(clip)) {
-                continue;
-            }
             let weight = tri.iter().map(|&k| f64::from(grid.weight[k])).sum::<f64>() / 3.0;
             triangles.push(DebugTriangle {
                 pixels: p.map(|q| frame.to_pixel(q[0], q[1])),
