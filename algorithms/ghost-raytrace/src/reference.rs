@@ -62,8 +62,9 @@ pub const REFERENCE_GRID_SCALE: f64 = 10.0;
 /// whose search rays all stop found from their paraxial entrance rectangle, and smaller entry
 /// regions zoomed into (`bounds::paraxial_seed`, `zoom`). 8: a spectral ghost's rectangle
 /// holds its region at its first and last band (`bounds::widened_for`). 9: every edge
-/// feathered over one drawn pixel along its own gradient (`triangles::edge_feathers`).
-pub const REFERENCE_VERSION: u32 = 9;
+/// feathered over one drawn pixel along its own gradient (`triangles::edge_feathers`). 10: the
+/// rasterizer sums each tile's pixels in f64 (`raster::TileSums`).
+pub const REFERENCE_VERSION: u32 = 10;
 
 /// A text naming everything the reference image depends on: the renderer's version and
 /// settings, the reflection order, the lens (fingerprint of its canonical XML), the aperture, the frame and every

@@ -446,3 +446,47 @@ fn a_shader_s_row_split_skips_and_cores_pixels() {
         }
     }
 }
+
+#[test]
+fn a_pixel_summing_millions_of_tiny_pieces_keeps_their_total() {
+    // A 2 × 2-pixel square cut into 1000² cells of two triangles each (as a dense reference
+    // grid draws a ghost): each pixel gains half a million pieces of 2e-6 px². Summed in f32
+    // one by one, every piece would be rounded against the whole pixel (the sum drifts by a
+    // percent); summed in f64 per tile, each pixel is within f32 rounding of its area.
+    let n = 1000_u32;
+    let side = 2.0_f64;
+    let pts: Vec<[f32; 2]> = (0..=n)
+        .flat_map(|j| {
+            (0..=n).map(move |i| {
+                let s = side / f64::from(n);
+                [
+                    (10.0 + f64::from(i) * s) as f32,
+                    (20.0 + f64::from(j) * s) as f32,
+                ]
+            })
+        })
+        .collect();
+    let at = |i: u32, j: u32| j * (n + 1) + i;
+    let tris: Vec<[u32; 3]> = (0..n)
+        .flat_map(|j| (0..n).map(move |i| (i, j)))
+        .flat_map(|(i, j)| {
+            [
+                [at(i, j), at(i + 1, j), at(i + 1, j + 1)],
+                [at(i, j), at(i + 1, j + 1), at(i, j + 1)],
+            ]
+        })
+        .collect();
+    let mut img = HdrImage::new(40, 30);
+    draw(&mut img, &pts, &tris, [0.3, 1.0, 3.0]);
+    for (x, y) in [(10, 20), (11, 20), (10, 21), (11, 21)] {
+        let px = img.pixels[y * 40 + x];
+        for (got, want) in px.iter().zip([0.3_f32, 1.0, 3.0]) {
+            assert!(
+                ((got - want) / want).abs() < 1e-5,
+                "pixel ({x}, {y}): {got} for {want}"
+            );
+        }
+    }
+    let total: f64 = img.pixels.iter().map(|p| f64::from(p[1])).sum();
+    assert!((total - 4.0).abs() < 4e-5, "total {total}");
+}
