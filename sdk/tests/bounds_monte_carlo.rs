@@ -33,6 +33,7 @@ fn settings() -> McSettings {
         batches: 16,
         seed: 3,
         pilot: 129,
+        outside_weight: 1.0,
     }
 }
 

@@ -13,13 +13,18 @@
 //! variance); the Monte-Carlo image's own moments are given too. Its pixels sum the rays
 //! landing in them, as the rasterizer's exact coverage does the triangles, so the three images
 //! are compared pixel for pixel, ghost by ghost and all together.
+//!
+//! The Monte-Carlo image's rays are shared among the ghosts evenly (the same error bar on each
+//! ghost's energy) or in proportion to their flux in the frame ([`Allot`]: the least noise in
+//! the whole image); `McSettings::outside_weight` gathers each ghost's rays on the entry cells
+//! whose light lands in the frame.
 
 use flarebench_sdk::LensSystem;
 use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::frame::Frame;
 use flarebench_sdk::ghost::bounds::reference_flux;
 use flarebench_sdk::ghost::monte_carlo::{
-    McBand, McEstimate, McGhost, McImages, McSettings, ghost_monte_carlo, path_flux,
+    GhostRays, McBand, McEstimate, McGhost, McImages, McSettings, estimate, path_flux,
 };
 use flarebench_sdk::ghost::{GhostPath, GridTrace};
 use flarebench_sdk::image::HdrImage;
@@ -43,7 +48,28 @@ pub struct CrosscheckOptions {
     pub reference: bool,
     /// Only these ghosts (all when empty).
     pub ghosts: Vec<GhostPath>,
+    /// How the Monte-Carlo image estimate's rays are shared among the ghosts.
+    pub allot: Allot,
 }
+
+/// How the Monte-Carlo image estimate shares its rays (`mc.rays` times the ghosts) among the
+/// ghosts.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Allot {
+    /// `mc.rays` each: every ghost's energy gets the same relative error bar, whatever its
+    /// flux (the figure for comparing ghost by ghost).
+    #[default]
+    Even,
+    /// In proportion to each ghost's flux in the frame, measured by a pilot run of an eighth of
+    /// the rays (at least one ray a band and batch each): a ghost of flux `F` drawn with `N`
+    /// rays adds about `F²/N` to the image's summed squared noise, least for a given total at
+    /// `N ∝ F`. The whole image's noise falls; dim ghosts' own error bars grow.
+    Flux,
+}
+
+/// The pilot run's seed, apart from the estimate's streams.
+const PILOT_SEED: u64 = 0x9170_7a11_07ed;
 
 /// A ghost's image as one renderer drew it (alone in the frame).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
@@ -249,36 +275,55 @@ pub fn crosscheck(
         .chain(ref_plan.dropped.iter().map(|d| d.path))
         .filter(|&p| chosen(p))
         .collect();
-    for path in paths {
+    let light_beam = (theta, phi, 1.0);
+    let mc_settings = McSettings {
+        batches: opts.mc.batches.max(2),
+        ..opts.mc
+    };
+    // Every ghost's bands (the mesh reference's, in its colours) and its rays.
+    let mut traced: Vec<(GhostPath, Vec<McBand>, Option<GhostRays<'_>>)> = paths
+        .iter()
+        .map(|&path| {
+            let bands: Vec<McBand> = match ref_plan.ghosts.iter().find(|g| g.path == path) {
+                Some(job) => job
+                    .bands
+                    .iter()
+                    .map(|b| McBand {
+                        lambda_nm: ref_plan.bands[b.band].lambda_nm,
+                        rgb: b.rgb,
+                    })
+                    .collect(),
+                None => fallback_bins
+                    .iter()
+                    .map(|bin| McBand {
+                        lambda_nm: bin.centre_nm,
+                        rgb: colours.bin_colour(path, bin),
+                    })
+                    .collect(),
+            };
+            let lambdas: Vec<f64> = bands.iter().map(|b| b.lambda_nm).collect();
+            let rays = GhostRays::new(
+                system,
+                aperture,
+                &frame,
+                path,
+                light_beam,
+                &lambdas,
+                &mc_settings,
+            );
+            (path, bands, rays)
+        })
+        .collect();
+    if opts.allot == Allot::Flux {
+        allot_by_flux(&mut traced, &frame, &mc_settings);
+    }
+    for (path, bands, rays) in &traced {
+        let path = *path;
         let ref_job = ref_plan.ghosts.iter().find(|g| g.path == path);
-        let bands: Vec<McBand> = match ref_job {
-            Some(job) => job
-                .bands
-                .iter()
-                .map(|b| McBand {
-                    lambda_nm: ref_plan.bands[b.band].lambda_nm,
-                    rgb: b.rgb,
-                })
-                .collect(),
-            None => fallback_bins
-                .iter()
-                .map(|bin| McBand {
-                    lambda_nm: bin.centre_nm,
-                    rgb: colours.bin_colour(path, bin),
-                })
-                .collect(),
-        };
         let mut mc_images = McImages::new(&frame);
-        let mc = ghost_monte_carlo(
-            system,
-            aperture,
-            &frame,
-            path,
-            (theta, phi, 1.0),
-            &bands,
-            &opts.mc,
-            Some(&mut mc_images),
-        );
+        let mc = rays
+            .as_ref()
+            .map(|r| estimate(r, bands, &frame, Some(&mut mc_images)));
         images.mc.add(&mc_images);
         let mc_share = match Sequence::ghost_path(system, BOUNDS_LAMBDA_NM, &path) {
             Ok(seq) => {
@@ -368,6 +413,38 @@ pub fn crosscheck(
         mc_noise,
         images,
     })
+}
+
+/// Shares `settings.rays` times the ghosts among `traced` in proportion to each one's flux in
+/// the frame, as a pilot run of an eighth of the rays (from its own random streams) measures
+/// it ([`Allot::Flux`]).
+fn allot_by_flux(
+    traced: &mut [(GhostPath, Vec<McBand>, Option<GhostRays<'_>>)],
+    frame: &Frame,
+    settings: &McSettings,
+) {
+    let pilot = (settings.rays / 8).max(1);
+    let flux: Vec<f64> = traced
+        .iter_mut()
+        .map(|(_, bands, rays)| {
+            rays.as_mut().map_or(0.0, |r| {
+                r.set_rays(pilot, settings.seed ^ PILOT_SEED);
+                estimate(r, bands, frame, None).flux_in_frame.mean.max(0.0)
+            })
+        })
+        .collect();
+    let total_flux: f64 = flux.iter().sum();
+    let total_rays = (settings.rays * traced.len()) as f64;
+    for ((_, _, rays), f) in traced.iter_mut().zip(flux) {
+        if let Some(r) = rays {
+            let share = if total_flux > 0.0 {
+                f / total_flux
+            } else {
+                0.0
+            };
+            r.set_rays((total_rays * share).round() as usize, settings.seed);
+        }
+    }
 }
 
 /// One ghost's squared image differences against its Monte-Carlo image.

@@ -131,6 +131,7 @@ pub fn render_into(
             batches,
             seed: light_seed(settings.seed, li),
             pilot: PILOT,
+            outside_weight: 1.0,
         };
         let beam = (
             light.theta_deg.to_radians(),

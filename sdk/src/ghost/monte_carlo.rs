@@ -17,10 +17,16 @@
 //! cells is not sampled: that is the estimator's one assumption, and the pilot's resolution
 //! and the slack above are what it rests on.
 //!
-//! **Sampling.** Every active cell is split into `q × q` strata and each stratum gets one ray
-//! at a uniformly jittered point, per band and per batch; `q` is the largest that keeps the
-//! rays asked for (`q ≥ 1`). A ray that completes the path inside every clear semi-diameter
-//! carries the flux `E · cos θ · A_stratum · T · τ(stop)`: `T` the exact product of the
+//! **Sampling.** The rays asked for are shared equally among the bands and batches. When a
+//! batch of a band has at least as many rays as there are active cells, every cell is split
+//! into `q × q` strata (`q` the largest that keeps to the rays) and each stratum gets one ray
+//! at a uniformly jittered point; with fewer rays than cells, the cells (in row order) are
+//! split into runs of nearly equal length, one per ray, and each ray starts at a uniform point
+//! of a uniformly chosen cell of its run, its stratum the whole run ([`Strata`]). Either way
+//! every batch of every band traces at least one ray, and the estimate is unbiased whatever
+//! the count: a caller may give a dim ghost a hundredth of a bright one's rays (the image's
+//! noise is least with rays in proportion to flux). A ray that completes the path inside
+//! every clear semi-diameter carries the flux `E · cos θ · A_stratum · T · τ(stop)`: `T` the exact product of the
 //! Fresnel/coating factors along its path, `τ` the aperture's (hard-edged) transmission at its
 //! last stop crossing (the renderer's convention, `docs/physics.md`), and `E` the light's
 //! irradiance. The flux is added where it lands: to sums for the energy, the centroid and the
@@ -57,7 +63,7 @@ const LUMINANCE: [f64; 3] = [0.2126, 0.7152, 0.0722];
 /// How many rays, in how many batches, from which seed.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct McSettings {
-    /// Rays per ghost, over all its bands and batches (at least one per stratum is traced).
+    /// Rays per ghost, over all its bands and batches (at least one per band and batch).
     pub rays: usize,
     /// Independent batches the error bar is measured from (at least 2).
     pub batches: usize,
@@ -65,6 +71,11 @@ pub struct McSettings {
     pub seed: u64,
     /// Pilot grid vertices a side over the entry square.
     pub pilot: usize,
+    /// Sampling density, relative to the rest, of the active cells whose corners' rays all land
+    /// well outside the frame (1: every cell alike). Below 1, rays gather where the image is,
+    /// each weighed by the inverse of its density, so every estimate stays unbiased: the
+    /// image's and the in-frame flux's noise fall, the whole flux's grows.
+    pub outside_weight: f64,
 }
 
 impl Default for McSettings {
@@ -74,6 +85,7 @@ impl Default for McSettings {
             batches: 16,
             seed: 0x5eed,
             pilot: 129,
+            outside_weight: 1.0,
         }
     }
 }
@@ -145,9 +157,9 @@ pub struct McGhost {
     pub path: GhostPath,
     /// Rays traced (over every band and batch).
     pub rays: usize,
-    /// Active pilot cells and strata per cell a side.
+    /// Active pilot cells, and how each batch of each band laid its rays over them.
     pub cells: usize,
-    pub strata: usize,
+    pub strata: Strata,
     /// Luminance-weighted flux of every ray that reaches the sensor (image units: an image of
     /// the ghost alone sums to this, uncropped).
     pub flux: McEstimate,
@@ -385,12 +397,6 @@ struct Sums {
     yy: f64,
 }
 
-/// Strata per cell a side for `rays` over `cells` cells, `bands` bands and `batches` batches.
-fn strata(rays: usize, cells: usize, bands: usize, batches: usize) -> usize {
-    let per_cell = rays as f64 / (cells.max(1) * bands.max(1) * batches.max(1)) as f64;
-    (per_cell.sqrt().floor() as usize).max(1)
-}
-
 /// The Monte-Carlo estimate of ghost `path` lit by a light at `theta`, `phi` (radians) of
 /// irradiance `irradiance`, at `bands` (each traced, in its colour), seen through `aperture`
 /// in `frame`; splatted into `images` when given (added to what they hold).
@@ -408,7 +414,6 @@ pub fn ghost_monte_carlo(
     settings: &McSettings,
     images: Option<&mut McImages>,
 ) -> Option<McGhost> {
-    let batches = settings.batches.max(2);
     let lambdas: Vec<f64> = bands.iter().map(|b| b.lambda_nm).collect();
     let rays = GhostRays::new(
         system,
@@ -418,10 +423,27 @@ pub fn ghost_monte_carlo(
         light,
         &lambdas,
         &McSettings {
-            batches,
+            batches: settings.batches.max(2),
             ..*settings
         },
     )?;
+    Some(estimate(&rays, bands, frame, images))
+}
+
+/// The Monte-Carlo estimate from `rays` (prepared at `bands`' wavelengths, with at least two
+/// batches), each band in its colour; splatted into `images` when given (added to what they
+/// hold).
+///
+/// # Panics
+/// If `bands` is not as long as `rays`' bands (a programming error).
+pub fn estimate(
+    rays: &GhostRays<'_>,
+    bands: &[McBand],
+    frame: &Frame,
+    images: Option<&mut McImages>,
+) -> McGhost {
+    assert_eq!(bands.len(), rays.bands(), "one colour per traced band");
+    let batches = rays.batches();
     let (w, h) = (frame.width as f64, frame.height as f64);
     let want_images = images.is_some();
     let jobs: Vec<(usize, usize)> = (0..bands.len())
@@ -547,8 +569,8 @@ pub fn ghost_monte_carlo(
     // Each batch estimates the whole flux: their mean and its standard error.
     let flux = est(|s| s.flux);
     let flux_in = est(|s| s.flux_in);
-    Some(McGhost {
-        path,
+    McGhost {
+        path: rays.path(),
         rays: rays.rays(),
         cells: rays.region().cells.len(),
         strata: rays.strata(),
@@ -558,7 +580,7 @@ pub fn ghost_monte_carlo(
         centroid_err_px: centroid_err,
         moments_px2: moments,
         entrance_span: span,
-    })
+    }
 }
 
 /// Adds `e` to the pixel that holds the point (`px`, `py`) (pixel `(i, j)` spans `[i, i + 1)
@@ -598,9 +620,8 @@ pub fn path_flux(
         1.0,
     );
     let batches = settings.batches.max(2);
-    let q = strata(settings.rays, region.cells.len(), 1, batches);
-    let (cw, ch) = region.cell();
-    let stratum_flux = cw * ch / (q * q) as f64 * theta.cos();
+    let strata = Strata::for_rays(settings.rays / batches, region.cells.len());
+    let cos = theta.cos();
     let key = seq.steps.len() as u64;
     let values: Vec<f64> = (0..batches)
         .into_par_iter()
@@ -615,11 +636,12 @@ pub fn path_flux(
                     stop_radius,
                     theta,
                     &region,
-                    q,
+                    &[],
+                    strata,
                     &mut rng,
                     hits,
                     |l| {
-                        sum += stratum_flux * l.throughput;
+                        sum += cos * l.area * l.throughput;
                     },
                 );
                 sum
@@ -633,5 +655,5 @@ mod rays;
 #[cfg(test)]
 mod tests;
 
-pub use rays::{GhostRays, McRay};
+pub use rays::{GhostRays, McRay, Strata};
 use rays::{SplitMix64, sample_batch};

@@ -9,7 +9,7 @@ use clap::Args;
 use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::ghost::GhostPath;
 use flarebench_sdk::ghost::monte_carlo::McSettings;
-use ghost_raytrace::crosscheck::{Crosscheck, CrosscheckOptions, GhostRow, crosscheck};
+use ghost_raytrace::crosscheck::{Allot, Crosscheck, CrosscheckOptions, GhostRow, crosscheck};
 use ghost_raytrace::scene::{LightSpec, Quality};
 
 use super::render::{frame_for, parse_size};
@@ -24,9 +24,21 @@ pub struct CrosscheckArgs {
     /// The light: THETA,PHI[,INTENSITY[,KELVIN or R:G:B]] (degrees).
     #[arg(long, default_value = "10,30", value_parser = LightSpec::parse)]
     pub light: LightSpec,
-    /// Monte-Carlo rays per ghost (image estimate; the 550 nm energy share traces as many).
+    /// Monte-Carlo rays per ghost (image estimate: each ghost's with `--allot even`, their mean
+    /// with `flux`; the 550 nm energy share traces as many for each ghost).
     #[arg(long, default_value_t = 1 << 18)]
     pub rays: usize,
+    /// How the Monte-Carlo image estimate shares `--rays` × the ghosts among them: `even`
+    /// (the same error bar on every ghost's energy) or `flux` (in proportion to each ghost's
+    /// flux in the frame, from a pilot of an eighth of the rays: the least noise in the whole
+    /// image for the rays, dim ghosts' own error bars wider).
+    #[arg(long, value_enum, default_value_t = AllotArg::Even)]
+    pub allot: AllotArg,
+    /// Sampling density, relative to the rest, of the entry cells whose rays all land outside
+    /// the frame (1: uniform; below 1 the rays gather where the image is, each weighed by its
+    /// density, so the estimates stay unbiased).
+    #[arg(long, default_value_t = 0.0625)]
+    pub outside_weight: f64,
     /// Independent batches the Monte-Carlo error bars come from.
     #[arg(long, default_value_t = 16)]
     pub batches: usize,
@@ -52,6 +64,22 @@ pub struct CrosscheckArgs {
     /// `reference.exr` (unless `--no-reference`) and `renderer.exr`.
     #[arg(long, value_name = "DIR")]
     pub export: Option<std::path::PathBuf>,
+}
+
+/// `--allot` (`ghost_raytrace::crosscheck::Allot`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum AllotArg {
+    Even,
+    Flux,
+}
+
+impl From<AllotArg> for Allot {
+    fn from(a: AllotArg) -> Allot {
+        match a {
+            AllotArg::Even => Allot::Even,
+            AllotArg::Flux => Allot::Flux,
+        }
+    }
 }
 
 fn parse_ghost(s: &str) -> Result<GhostPath, String> {
@@ -125,6 +153,10 @@ fn export(dir: &std::path::Path, c: &Crosscheck) -> anyhow::Result<()> {
 pub fn run(args: &CrosscheckArgs, quiet: bool) -> anyhow::Result<()> {
     anyhow::ensure!(args.rays >= 1, "--rays must be at least 1");
     anyhow::ensure!(args.batches >= 2, "--batches must be at least 2");
+    anyhow::ensure!(
+        args.outside_weight > 0.0 && args.outside_weight <= 1.0,
+        "--outside-weight must be in (0, 1]"
+    );
     let sys = lens_library::load(&args.lens, quiet || args.json)?.system;
     let frame = frame_for(&sys, args.size);
     let opts = CrosscheckOptions {
@@ -132,11 +164,13 @@ pub fn run(args: &CrosscheckArgs, quiet: bool) -> anyhow::Result<()> {
             rays: args.rays,
             batches: args.batches,
             seed: args.seed,
+            outside_weight: args.outside_weight,
             ..McSettings::default()
         },
         quality: args.quality,
         reference: !args.no_reference,
         ghosts: args.ghosts.clone(),
+        allot: args.allot.into(),
     };
     let c = crosscheck(&sys, &Aperture::Circular, frame, &args.light, &opts)?;
     if let Some(dir) = &args.export {

@@ -31,7 +31,7 @@ use flarebench_sdk::image::HdrImage;
 use flarebench_sdk::paraxial::{analyse, stop_opening};
 use flarebench_sdk::trace::InterfaceTableSet;
 use flarebench_sdk::{LensSystem, Medium, Surface};
-use ghost_raytrace::crosscheck::{CrosscheckOptions, crosscheck};
+use ghost_raytrace::crosscheck::{Allot, CrosscheckOptions, crosscheck};
 use ghost_raytrace::plan::PlanOptions;
 use ghost_raytrace::scene::{LightSpec, Quality};
 
@@ -455,6 +455,7 @@ pub fn check_against_mc(
         quality: Quality::Default,
         reference: false,
         ghosts: Vec::new(),
+        allot: Allot::Even,
     };
     let frame = frame_of(system, options.width.min(160));
     let cc = match crosscheck(system, &Aperture::Circular, frame, &light, &opts) {

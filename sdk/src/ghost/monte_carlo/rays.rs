@@ -6,14 +6,20 @@
 //! renderer adds them into an image.
 
 use glam::DVec3;
+use rayon::prelude::*;
 
 use crate::aperture::{Aperture, ApertureSampler};
 use crate::frame::Frame;
 use crate::system::LensSystem;
 use crate::trace::{Hit, Ray, Sequence};
 
-use super::{McRegion, McSettings, aperture_reach, entry_square, stop_hit, strata, zoomed_region};
+use super::{McRegion, McSettings, aperture_reach, entry_square, stop_hit, zoomed_region};
 use crate::ghost::GhostPath;
+
+/// How far (pixels) outside the frame a cell's corners may land and still count as landing in
+/// it ([`McSettings::outside_weight`]): what lands between the corners may spread a little
+/// beyond their box.
+const FRAME_MARGIN_PX: f64 = 2.0;
 
 /// A small, fast generator (SplitMix64, Steele, Lea & Flood 2014): good enough for jitter,
 /// and seeded per stream so that results do not depend on scheduling.
@@ -45,11 +51,59 @@ impl SplitMix64 {
     }
 }
 
-/// A ray that carries light: its entrance point, landing (sensor mm, meridional frame), stop
-/// crossing over the stop radius (meridional frame) and throughput.
+/// How one batch of one band lays its rays over the active cells.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Strata {
+    /// Every active cell split into `q × q` strata, one ray in each.
+    PerCell(usize),
+    /// This many rays, stratified along the active cells in row order laid end to end, each
+    /// cell as long as its sampling weight (all 1 unless the region weighs them): ray `r` starts
+    /// at `(r + ξ)/n` of the whole length, at a uniform point of the cell found there, and
+    /// stands for `W / (n w)` cells' area (`W` the summed weight, `w` its cell's). Used for
+    /// fewer rays than cells, and whenever the cells are weighed.
+    Runs(usize),
+}
+
+impl Strata {
+    /// The strata for `rays` a batch of one band over `cells` active cells: as many `q × q`
+    /// strata per cell as fit (`q ≥ 1`) when there are at least as many rays as cells, else a
+    /// run of cells per ray (at least one ray).
+    pub fn for_rays(rays: usize, cells: usize) -> Strata {
+        let cells = cells.max(1);
+        if rays >= cells {
+            Strata::PerCell(((rays as f64 / cells as f64).sqrt().floor() as usize).max(1))
+        } else {
+            Strata::Runs(rays.max(1))
+        }
+    }
+
+    /// The strata for `rays` a batch of one band over `cells` cells, `weighed` or not: runs
+    /// whenever they are.
+    fn for_weighed_rays(rays: usize, cells: usize, weighed: bool) -> Strata {
+        if weighed {
+            Strata::Runs(rays.max(1))
+        } else {
+            Strata::for_rays(rays, cells)
+        }
+    }
+
+    /// Rays it traces over `cells` active cells (none over none).
+    pub fn rays(&self, cells: usize) -> usize {
+        match *self {
+            Strata::PerCell(q) => cells * q * q,
+            Strata::Runs(n) if cells > 0 => n,
+            Strata::Runs(_) => 0,
+        }
+    }
+}
+
+/// A ray that carries light: its entrance point, the entrance area its stratum stands for
+/// (mm²), landing (sensor mm, meridional frame), stop crossing over the stop radius
+/// (meridional frame) and throughput.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Landed {
     pub(super) entrance: [f64; 2],
+    pub(super) area: f64,
     pub(super) sensor: [f64; 2],
     pub(super) stop_uv: [f64; 2],
     pub(super) throughput: f64,
@@ -57,6 +111,8 @@ pub(super) struct Landed {
 
 /// Traces the strata of `region` for one batch of `seq`, calling `f` for every ray that
 /// completes the path inside every clear semi-diameter; `hits` is the caller's buffer.
+/// `cumulative` holds the running sums of the cells' sampling weights (empty: all 1), which
+/// only [`Strata::Runs`] uses.
 #[allow(
     clippy::too_many_arguments,
     reason = "one batch's whole description, private"
@@ -67,7 +123,8 @@ pub(super) fn sample_batch(
     stop_radius: f64,
     theta: f64,
     region: &McRegion,
-    q: usize,
+    cumulative: &[f64],
+    strata: Strata,
     rng: &mut SplitMix64,
     hits: &mut Vec<Hit>,
     mut f: impl FnMut(Landed),
@@ -75,28 +132,65 @@ pub(super) fn sample_batch(
     let (s, c) = theta.sin_cos();
     let dir = DVec3::new(0.0, s, c);
     let (cw, ch) = region.cell();
-    let (sw, sh) = (cw / q as f64, ch / q as f64);
-    for &(i, j) in &region.cells {
-        let x0 = region.square.x0 + i as f64 * cw;
-        let y0 = region.square.y0 + j as f64 * ch;
-        for sj in 0..q {
-            for si in 0..q {
-                let x = x0 + (si as f64 + rng.next_f64()) * sw;
-                let y = y0 + (sj as f64 + rng.next_f64()) * sh;
-                hits.clear();
-                let r = seq.trace_with_hits(&Ray::new(DVec3::new(x, y, 0.0), dir), hits);
-                if !r.completed || r.max_relative_radius > 1.0 {
-                    continue;
+    let mut shoot = |x: f64, y: f64, area: f64, hits: &mut Vec<Hit>| {
+        hits.clear();
+        let r = seq.trace_with_hits(&Ray::new(DVec3::new(x, y, 0.0), dir), hits);
+        if !r.completed || r.max_relative_radius > 1.0 {
+            return;
+        }
+        let stop_uv = stop.and_then(|h| hits.get(h)).map_or([0.0, 0.0], |h| {
+            [h.position.x / stop_radius, h.position.y / stop_radius]
+        });
+        f(Landed {
+            entrance: [x, y],
+            area,
+            sensor: [r.ray.origin.x, r.ray.origin.y],
+            stop_uv,
+            throughput: r.throughput,
+        });
+    };
+    let corner = |(i, j): (u32, u32)| {
+        (
+            region.square.x0 + f64::from(i) * cw,
+            region.square.y0 + f64::from(j) * ch,
+        )
+    };
+    match strata {
+        Strata::PerCell(q) => {
+            let (sw, sh) = (cw / q as f64, ch / q as f64);
+            for &cell in &region.cells {
+                let (x0, y0) = corner(cell);
+                for sj in 0..q {
+                    for si in 0..q {
+                        let x = x0 + (si as f64 + rng.next_f64()) * sw;
+                        let y = y0 + (sj as f64 + rng.next_f64()) * sh;
+                        shoot(x, y, sw * sh, hits);
+                    }
                 }
-                let stop_uv = stop.and_then(|h| hits.get(h)).map_or([0.0, 0.0], |h| {
-                    [h.position.x / stop_radius, h.position.y / stop_radius]
-                });
-                f(Landed {
-                    entrance: [x, y],
-                    sensor: [r.ray.origin.x, r.ray.origin.y],
-                    stop_uv,
-                    throughput: r.throughput,
-                });
+            }
+        }
+        Strata::Runs(n) => {
+            let cells = region.cells.len();
+            if cells == 0 {
+                return;
+            }
+            let total = cumulative.last().copied().unwrap_or(cells as f64);
+            let run = total / n as f64;
+            for r in 0..n {
+                let u = (r as f64 + rng.next_f64()) * run;
+                let (k, w) = if cumulative.is_empty() {
+                    ((u as usize).min(cells - 1), 1.0)
+                } else {
+                    let k = cumulative.partition_point(|&c| c <= u).min(cells - 1);
+                    (
+                        k,
+                        cumulative[k] - if k > 0 { cumulative[k - 1] } else { 0.0 },
+                    )
+                };
+                let (x0, y0) = corner(region.cells[k]);
+                let x = x0 + rng.next_f64() * cw;
+                let y = y0 + rng.next_f64() * ch;
+                shoot(x, y, cw * ch * run / w, hits);
             }
         }
     }
@@ -122,12 +216,15 @@ pub struct McRay {
 pub struct GhostRays<'a> {
     /// One sequence per band (stop unclipped at its recorded crossing) and that crossing.
     seqs: Vec<(Sequence<f64>, Option<usize>)>,
+    path: GhostPath,
     region: McRegion,
-    /// Strata per active cell a side.
-    q: usize,
+    /// Running sums of the active cells' sampling weights (empty: all 1).
+    cumulative: Vec<f64>,
+    /// How each batch of each band lays its rays.
+    strata: Strata,
     batches: usize,
-    /// Flux of a stratum of unit throughput.
-    stratum_flux: f64,
+    /// Flux per entrance area (mm²) of unit throughput: cos θ × the irradiance.
+    unit_flux: f64,
     theta: f64,
     /// sin φ, cos φ.
     phi: (f64, f64),
@@ -181,13 +278,11 @@ impl<'a> GhostRays<'a> {
             aperture_reach(aperture),
         );
         let batches = settings.batches.max(1);
-        let q = strata(settings.rays, region.cells.len(), seqs.len(), batches);
-        let (cw, ch) = region.cell();
         let key = path
             .reflections()
             .iter()
             .fold(0u64, |k, &s| k.wrapping_mul(131).wrapping_add(s as u64 + 1));
-        Some(GhostRays {
+        let mut rays = GhostRays {
             seqs: seqs
                 .into_iter()
                 .map(|s| {
@@ -195,9 +290,11 @@ impl<'a> GhostRays<'a> {
                     (s, stop)
                 })
                 .collect(),
-            q,
+            path,
+            cumulative: Vec::new(),
+            strata: Strata::PerCell(1),
             batches,
-            stratum_flux: cw * ch / (q * q) as f64 * theta.cos() * irradiance,
+            unit_flux: theta.cos() * irradiance,
             region,
             theta,
             phi: phi.sin_cos(),
@@ -206,7 +303,91 @@ impl<'a> GhostRays<'a> {
             frame: *frame,
             seed: settings.seed,
             key,
-        })
+        };
+        if settings.outside_weight < 1.0 {
+            rays.cumulative = rays.weigh_cells(&ends, settings.outside_weight.max(1e-6));
+        }
+        rays.set_rays(settings.rays, settings.seed);
+        Some(rays)
+    }
+
+    /// Running sums of the active cells' sampling weights: 1 for a cell whose corners' landing
+    /// points (traced at `ends`, vignetted or not) have a bounding box, grown by two pixels,
+    /// that meets the frame, or whose corners all stop on the way; `outside` for the others.
+    fn weigh_cells(&self, ends: &[Sequence<f64>], outside: f64) -> Vec<f64> {
+        let region = &self.region;
+        let n = region.pilot;
+        let (cw, ch) = region.cell();
+        let (s, c) = self.theta.sin_cos();
+        let dir = DVec3::new(0.0, s, c);
+        let mut used = vec![false; n * n];
+        for &(i, j) in &region.cells {
+            let (i, j) = (i as usize, j as usize);
+            for v in [
+                j * n + i,
+                j * n + i + 1,
+                (j + 1) * n + i,
+                (j + 1) * n + i + 1,
+            ] {
+                used[v] = true;
+            }
+        }
+        // Each used vertex's landing points (pixels), one per end wavelength.
+        let landings: Vec<Vec<[f64; 2]>> = used
+            .par_iter()
+            .enumerate()
+            .map_init(Vec::new, |hits: &mut Vec<Hit>, (v, &u)| {
+                if !u {
+                    return Vec::new();
+                }
+                let x = region.square.x0 + (v % n) as f64 * cw;
+                let y = region.square.y0 + (v / n) as f64 * ch;
+                ends.iter()
+                    .filter_map(|seq| {
+                        hits.clear();
+                        let r = seq.trace_with_hits(&Ray::new(DVec3::new(x, y, 0.0), dir), hits);
+                        r.completed
+                            .then(|| self.to_px([r.ray.origin.x, r.ray.origin.y]))
+                    })
+                    .collect()
+            })
+            .collect();
+        let (w, h) = (self.frame.width as f64, self.frame.height as f64);
+        let mut total = 0.0;
+        region
+            .cells
+            .iter()
+            .map(|&(i, j)| {
+                let (i, j) = (i as usize, j as usize);
+                let corners = [
+                    j * n + i,
+                    j * n + i + 1,
+                    (j + 1) * n + i,
+                    (j + 1) * n + i + 1,
+                ];
+                let mut b = [
+                    f64::INFINITY,
+                    f64::INFINITY,
+                    f64::NEG_INFINITY,
+                    f64::NEG_INFINITY,
+                ];
+                for p in corners.iter().flat_map(|&v| &landings[v]) {
+                    b = [
+                        b[0].min(p[0]),
+                        b[1].min(p[1]),
+                        b[2].max(p[0]),
+                        b[3].max(p[1]),
+                    ];
+                }
+                let stopped = b[0] > b[2];
+                let meets = b[0] - FRAME_MARGIN_PX < w
+                    && b[2] + FRAME_MARGIN_PX >= 0.0
+                    && b[1] - FRAME_MARGIN_PX < h
+                    && b[3] + FRAME_MARGIN_PX >= 0.0;
+                total += if stopped || meets { 1.0 } else { outside };
+                total
+            })
+            .collect()
     }
 
     /// The active cells rays start in.
@@ -214,9 +395,25 @@ impl<'a> GhostRays<'a> {
         &self.region
     }
 
-    /// Strata per active cell a side.
-    pub fn strata(&self) -> usize {
-        self.q
+    /// The ghost path.
+    pub fn path(&self) -> GhostPath {
+        self.path
+    }
+
+    /// How each batch of each band lays its rays.
+    pub fn strata(&self) -> Strata {
+        self.strata
+    }
+
+    /// Lays `rays` over every band and batch from now on, from the random streams of `seed`
+    /// (the active region is kept: this costs no tracing).
+    pub fn set_rays(&mut self, rays: usize, seed: u64) {
+        self.strata = Strata::for_weighed_rays(
+            rays / (self.seqs.len() * self.batches).max(1),
+            self.region.cells.len(),
+            !self.cumulative.is_empty(),
+        );
+        self.seed = seed;
     }
 
     /// Wavelength bands.
@@ -231,7 +428,7 @@ impl<'a> GhostRays<'a> {
 
     /// Rays traced over every band and batch.
     pub fn rays(&self) -> usize {
-        self.region.cells.len() * self.q * self.q * self.seqs.len() * self.batches
+        self.strata.rays(self.region.cells.len()) * self.seqs.len() * self.batches
     }
 
     /// Where a point of the sensor (meridional frame, mm) lies in the frame (pixels).
@@ -263,14 +460,15 @@ impl<'a> GhostRays<'a> {
             self.stop_radius,
             self.theta,
             &self.region,
-            self.q,
+            &self.cumulative,
+            self.strata,
             &mut rng,
             hits,
             |l| {
                 let [u, v] = l.stop_uv;
                 let uv = [u * cphi - v * sphi, u * sphi + v * cphi];
                 let tau = f64::from(self.sampler.transmission(uv[0] as f32, uv[1] as f32));
-                let flux = self.stratum_flux * l.throughput * tau;
+                let flux = self.unit_flux * l.area * l.throughput * tau;
                 if flux <= 0.0 {
                     return;
                 }
