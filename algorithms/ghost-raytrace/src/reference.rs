@@ -63,8 +63,9 @@ pub const REFERENCE_GRID_SCALE: f64 = 10.0;
 /// regions zoomed into (`bounds::paraxial_seed`, `zoom`). 8: a spectral ghost's rectangle
 /// holds its region at its first and last band (`bounds::widened_for`). 9: every edge
 /// feathered over one drawn pixel along its own gradient (`triangles::edge_feathers`). 10: the
-/// rasterizer sums each tile's pixels in f64 (`raster::TileSums`).
-pub const REFERENCE_VERSION: u32 = 10;
+/// rasterizer sums each tile's pixels in f64 (`raster::TileSums`). 11: slivers under the Airy
+/// disc's area widened across their longest edge, not scaled (`triangles::grow_to_area`).
+pub const REFERENCE_VERSION: u32 = 11;
 
 /// A text naming everything the reference image depends on: the renderer's version and
 /// settings, the reflection order, the lens (fingerprint of its canonical XML), the aperture, the frame and every

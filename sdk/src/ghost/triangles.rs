@@ -221,11 +221,13 @@ impl<'a> BandTriangles<'a> {
         let area = if area >= self.min_area {
             area
         } else if area > 0.0 {
-            // Grow about the centroid to the diffraction limit.
-            let s = (self.min_area / area).sqrt();
-            for q in &mut p {
-                *q = [c[0] + (q[0] - c[0]) * s, c[1] + (q[1] - c[1]) * s];
-            }
+            grow_to_area(
+                &mut p,
+                c,
+                area,
+                self.min_area,
+                SLIVER_REACH_AIRY * self.airy,
+            );
             self.min_area
         } else {
             // Degenerate: a small triangle of area 2·airy² at the point.
@@ -294,6 +296,46 @@ impl EdgeFeathers {
         } else {
             self.clip.min(self.stop)
         }
+    }
+}
+
+/// How far (in Airy radii) a triangle grown to the Airy disc about its centroid may reach:
+/// beyond it, the triangle is a sliver and is widened across its longest edge instead.
+const SLIVER_REACH_AIRY: f64 = 4.0;
+
+/// Grows triangle `p` (centroid `c`, area `area` > 0) to `min_area`, keeping its centroid:
+/// scaled about the centroid while that keeps its longest edge within `reach`, else (a
+/// sliver: a fold or a grazing ray stretches one corner far off) widened across its longest
+/// edge. Scaling a sliver by the same factor would stretch it to many times its length — a
+/// needle of the right area that crosses the frame, whose exact coverage the rasterizer's
+/// f32 arithmetic cannot resolve.
+fn grow_to_area(p: &mut [[f64; 2]; 3], c: [f64; 2], area: f64, min_area: f64, reach: f64) {
+    let s = (min_area / area).sqrt();
+    let edge = |a: usize, b: usize| (p[b][0] - p[a][0]).hypot(p[b][1] - p[a][1]);
+    let (a, b, apex) = [(0, 1, 2), (1, 2, 0), (2, 0, 1)]
+        .into_iter()
+        .max_by(|x, y| edge(x.0, x.1).total_cmp(&edge(y.0, y.1)))
+        .expect("three edges");
+    let len = edge(a, b);
+    if s * len <= reach || len <= 0.0 {
+        for q in p.iter_mut() {
+            *q = [c[0] + (q[0] - c[0]) * s, c[1] + (q[1] - c[1]) * s];
+        }
+        return;
+    }
+    // The unit normal of the longest edge towards the apex; the apex moves out along it until
+    // the height is 2·min_area/len, and every corner back by a third of that (the centroid
+    // stays).
+    let u = [(p[b][0] - p[a][0]) / len, (p[b][1] - p[a][1]) / len];
+    let mut n = [-u[1], u[0]];
+    let to_apex = [p[apex][0] - p[a][0], p[apex][1] - p[a][1]];
+    if to_apex[0] * n[0] + to_apex[1] * n[1] < 0.0 {
+        n = [-n[0], -n[1]];
+    }
+    let grow = 2.0 * (min_area - area) / len;
+    p[apex] = [p[apex][0] + n[0] * grow, p[apex][1] + n[1] * grow];
+    for q in p.iter_mut() {
+        *q = [q[0] - n[0] * grow / 3.0, q[1] - n[1] * grow / 3.0];
     }
 }
 
@@ -386,6 +428,46 @@ mod tests {
     /// A right triangle 0.1 mm a side at the origin, drawn on pixels 0.01 mm wide.
     const P: [[f64; 2]; 3] = [[0.0, 0.0], [0.1, 0.0], [0.0, 0.1]];
     const PIXEL_MM: f64 = 0.01;
+
+    fn area_and_centroid(p: &[[f64; 2]; 3]) -> (f64, [f64; 2]) {
+        let a = 0.5
+            * ((p[1][0] - p[0][0]) * (p[2][1] - p[0][1])
+                - (p[2][0] - p[0][0]) * (p[1][1] - p[0][1]))
+                .abs();
+        let c = [
+            (p[0][0] + p[1][0] + p[2][0]) / 3.0,
+            (p[0][1] + p[1][1] + p[2][1]) / 3.0,
+        ];
+        (a, c)
+    }
+
+    fn extent(p: &[[f64; 2]; 3]) -> f64 {
+        let e = |a: usize, b: usize| (p[b][0] - p[a][0]).hypot(p[b][1] - p[a][1]);
+        e(0, 1).max(e(1, 2)).max(e(2, 0))
+    }
+
+    #[test]
+    fn a_small_triangle_grows_about_its_centroid_and_a_sliver_only_across() {
+        let (airy, min_area) = (1e-3, std::f64::consts::PI * 1e-6);
+        // A compact triangle of a tenth of the Airy disc's area: scaled, shape kept.
+        let mut p = [[1.0, 2.0], [1.0005, 2.0], [1.0, 2.0005]];
+        let (a0, c0) = area_and_centroid(&p);
+        grow_to_area(&mut p, c0, a0, min_area, SLIVER_REACH_AIRY * airy);
+        let (a, c) = area_and_centroid(&p);
+        assert!((a / min_area - 1.0).abs() < 1e-9, "{a}");
+        assert!((c[0] - c0[0]).abs() < 1e-12 && (c[1] - c0[1]).abs() < 1e-12);
+        assert!(((p[1][0] - p[0][0]) / (p[2][1] - p[0][1]) - 1.0).abs() < 1e-9);
+        // A sliver 5 mm long and 1e-9 mm thick (a corner stretched off by a grazing ray):
+        // scaled alike it would reach 5 mm × 56 = 280 mm, across any frame; widened, it keeps
+        // its length and reaches the Airy disc's area.
+        let mut p = [[0.0, 0.0], [5.0, 0.0], [2.0, 1e-9]];
+        let (a0, c0) = area_and_centroid(&p);
+        grow_to_area(&mut p, c0, a0, min_area, SLIVER_REACH_AIRY * airy);
+        let (a, c) = area_and_centroid(&p);
+        assert!((a / min_area - 1.0).abs() < 1e-9, "{a}");
+        assert!((c[0] - c0[0]).abs() < 1e-12 && (c[1] - c0[1]).abs() < 1e-12);
+        assert!(extent(&p) < 5.0 + 1e-6, "{p:?}");
+    }
 
     #[test]
     fn each_edge_is_one_drawn_pixel_wide_along_its_own_gradient() {
