@@ -46,7 +46,7 @@ impl FlarePlugin for GhostSplat {
             params: vec![
                 ParamSpec::int(
                     "rays",
-                    "rays per ghost and light, over all its bands (at least one per stratum of its entrance region is traced)",
+                    "rays per ghost and light, over all its bands (at least one per band is traced)",
                     1024,
                     1 << 24,
                     DEFAULT_RAYS,

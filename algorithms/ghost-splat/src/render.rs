@@ -3,15 +3,16 @@
 //!
 //! **Rays.** Per light, wavelength band and ghost, the rays are those of
 //! `flarebench_sdk::ghost::monte_carlo`: a pilot grid of [`PILOT`]² entrance points finds the
-//! ghost's active cells, each split into `q × q` strata with one jittered ray each (`q` the
-//! largest that keeps `rays` rays per ghost over its bands, at least 1). A ray's flux (stratum
-//! area × cos θ × the light's intensity × exact Fresnel/coating throughput × aperture
-//! transmission at the stop) times its band's colour ([`crate::colour`]) is its energy, in
-//! the ray-traced renderer's image units. Above [`MAX_JOB_RAYS`] rays per band the rays are
+//! ghost's active cells; the `rays` rays per ghost, shared among its bands, are stratified
+//! over them, gathered on the cells whose light lands in the frame ([`OUTSIDE_WEIGHT`]: the
+//! others are sampled at that density, each of their rays weighed up by its inverse, so the
+//! image stays unbiased). A ray's flux (its stratum's area × cos θ × the light's intensity ×
+//! exact Fresnel/coating throughput × aperture transmission at the stop) times its band's
+//! colour ([`crate::colour`]) is its energy, in the ray-traced renderer's image units. Above [`MAX_JOB_RAYS`] rays per band the rays are
 //! split into independent batches of that size, each at `1/batches` weight.
 //!
 //! **Order.** Jobs (ghost, band, batch) are traced in parallel a wave at a time, each into its
-//! own list of landed rays (reserved to its stratum count: no allocation per ray); the lists
+//! own list of landed rays (reserved to its ray count: no allocation per ray); the lists
 //! are then splatted in job order, in parallel over strips of rows, into an f64 frame. Each
 //! pixel receives its rays in the same order whatever the thread count, so the image is the
 //! same bit for bit for a seed.
@@ -27,9 +28,11 @@ use crate::error::SplatError;
 use crate::kernel::Kernel;
 
 /// Pilot grid vertices a side over the entry square (the Monte-Carlo reference's default is
-/// 129; 65 keeps a ghost's pilot at 2 × 65² traces and its smallest ray count at one per
-/// stratum of up to 64² cells per band).
+/// 129; 65 keeps a ghost's pilot at 2 × 65² traces).
 pub const PILOT: usize = 65;
+/// Sampling density of the entry cells whose light lands outside the frame, relative to the
+/// others (`McSettings::outside_weight`).
+pub const OUTSIDE_WEIGHT: f64 = 1.0 / 16.0;
 /// Most rays of one band in one batch: more are split into batches, bounding the lists a
 /// wave holds (16 bytes of position and 24 of energy a ray).
 pub const MAX_JOB_RAYS: usize = 1 << 16;
@@ -39,7 +42,7 @@ pub const MAX_BANDS: usize = 64;
 /// What a splat render traces.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SplatSettings {
-    /// Rays per ghost and light, over all its bands (at least one per stratum is traced).
+    /// Rays per ghost and light, over all its bands (at least one per band is traced).
     pub rays: usize,
     pub kernel: Kernel,
     /// Wavelength bands, `1..=MAX_BANDS`.
@@ -131,7 +134,7 @@ pub fn render_into(
             batches,
             seed: light_seed(settings.seed, li),
             pilot: PILOT,
-            outside_weight: 1.0,
+            outside_weight: OUTSIDE_WEIGHT,
         };
         let beam = (
             light.theta_deg.to_radians(),
