@@ -31,6 +31,7 @@
 //! input order, so the result does not depend on the number of threads. The per-triangle and
 //! per-pixel work uses fixed-size stack polygons: no allocation.
 
+pub mod boxes;
 mod polygon;
 
 use rayon::prelude::*;
@@ -530,6 +531,23 @@ impl<const N: usize> Setup<N> {
     }
 }
 
+/// The pixel `[i, j]` of a `tw × th` tile that holds the whole triangle `v` (tile
+/// coordinates), if one does.
+#[inline]
+fn one_pixel(v: &[[f64; 2]; 3], tw: f64, th: f64) -> Option<[usize; 2]> {
+    let lo = [
+        v[0][0].min(v[1][0]).min(v[2][0]),
+        v[0][1].min(v[1][1]).min(v[2][1]),
+    ];
+    let hi = [
+        v[0][0].max(v[1][0]).max(v[2][0]),
+        v[0][1].max(v[1][1]).max(v[2][1]),
+    ];
+    let (x, y) = (lo[0].floor(), lo[1].floor());
+    (x >= 0.0 && y >= 0.0 && hi[0] <= (x + 1.0).min(tw) && hi[1] <= (y + 1.0).min(th))
+        .then_some([x as usize, y as usize])
+}
+
 /// Scratch reused for every triangle of a tile: clipped polygons and one row of per-column
 /// integrals.
 struct Scratch {
@@ -569,6 +587,18 @@ fn rasterize_in_tile<const N: usize, S: Shader<N>>(
     s: &mut Scratch,
 ) {
     let (tw, th) = (view.width as f64, view.height as f64);
+    if let Some([i, j]) = one_pixel(&tri.v, tw, th) {
+        // Wholly inside one pixel of the tile: that pixel's covered piece is the whole
+        // triangle (its area, shaded at its centroid), without clipping.
+        let [a, b, c] = tri.v;
+        let centroid = [(a[0] + b[0] + c[0]) / 3.0, (a[1] + b[1] + c[1]) / 3.0];
+        let value = shader.shade(&tri.interpolate(centroid));
+        let px = &mut sums.row(j, i, i + 1)[0];
+        for k in 0..3 {
+            px[k] += tri.area * f64::from(value[k]);
+        }
+        return;
+    }
     let whole = Polygon::triangle(tri.v[0], tri.v[1], tri.v[2]);
     whole.clip_slab::<0>(0.0, tw, &mut s.cols, &mut s.tmp);
     s.cols.clip_slab::<1>(0.0, th, &mut s.piece, &mut s.tmp);

@@ -19,7 +19,7 @@ use flarebench_sdk::ghost::GridTrace;
 use flarebench_sdk::ghost::context::{BandRef, GhostContext, GhostGrid, GhostLight, GhostStats};
 use flarebench_sdk::ghost::fringe::mesh_ghost_fringed;
 use flarebench_sdk::ghost::mesh::GhostMesh;
-use flarebench_sdk::ghost::render::{mesh_ghost, rasterize_ghost_mesh_into};
+use flarebench_sdk::ghost::render::{mesh_ghost, rasterize_ghost_mesh_into, splat_ghost};
 use flarebench_sdk::ghost::sink::{FrameLevels, GhostSink};
 use flarebench_sdk::image::{
     Blend, CoarseGrid, HdrImage, RowSpans, SpannedLevel, row_spans, upsample_spans_into,
@@ -30,7 +30,7 @@ use rayon::prelude::*;
 
 use crate::GhostRenderError;
 use crate::colour::bin_edge_nm;
-use crate::plan::{GhostJob, LightPlan};
+use crate::plan::{DrawMethod, GhostJob, LightPlan};
 
 /// How to carry out a plan.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -445,6 +445,7 @@ fn render_groups(
         // Worth it where a band's drawn area outweighs the extra meshing of its triangles.
         let px = ctx.frame.pixel_mm();
         !options.band_by_band
+            && job.method == DrawMethod::Mesh
             && job.spectral()
             && job.bounds.sensor.area() / (px * px) >= FRINGE_MIN_PIXELS * triangles as f64
     };
@@ -541,7 +542,11 @@ fn render_groups(
                         mesh_ghost_fringed(ctx, &ghost, &bands, &edges, grids, &mut mesh)
                     } else {
                         mesh.edge.reserve(triangles / 2);
-                        mesh_ghost(ctx, &ghost, &[band(range.start)], grid, &mut mesh)
+                        let draw = match job.method {
+                            DrawMethod::Mesh => mesh_ghost,
+                            DrawMethod::Splat => splat_ghost,
+                        };
+                        draw(ctx, &ghost, &[band(range.start)], grid, &mut mesh)
                     };
                     (mesh, s)
                 },

@@ -6,6 +6,8 @@
 //! - [`plan`]: which ghosts and wavelengths each light needs, and what is left out (with its
 //!   energy share).
 //! - [`colour`]: each ghost's colour per traced band, integrated in 5 nm steps.
+//! - [`method`]: how each ghost is drawn (meshed or splatted), by a per-ghost cost and error
+//!   model within the preset's error budget.
 //! - [`ghosts`]: carrying out a plan into a linear HDR image.
 //! - [`reference`]: the dense reference renderer behind every error figure.
 //! - [`crosscheck`]: every ghost by the independent Monte-Carlo reference, the mesh reference
@@ -17,6 +19,7 @@ pub mod colour;
 pub mod crosscheck;
 pub mod error;
 pub mod ghosts;
+pub mod method;
 pub mod plan;
 pub mod plugin;
 pub mod reference;

@@ -38,6 +38,8 @@ use serde::Serialize;
 
 use crate::GhostRenderError;
 use crate::colour::{Bin, GhostColours, SHAPE_NODES_NM, SpectralShape};
+use crate::method;
+pub use crate::method::{DrawMethod, MethodPrediction};
 use crate::scene::{LightSpec, Quality};
 
 /// Wavelength at which bounds and energies are found (nm).
@@ -105,6 +107,9 @@ pub struct GhostJob {
     /// whole bin ([`GhostColours::bin_colour`]).
     pub bands: Vec<GhostBand>,
     pub energy_share: f64,
+    /// How the ghost is drawn ([`crate::method`]), and what the plan predicted of each way.
+    pub method: DrawMethod,
+    pub prediction: MethodPrediction,
 }
 
 /// One traced wavelength of a ghost.
@@ -257,6 +262,12 @@ pub struct PlanOptions<'a> {
     /// element; the full search runs where the ghost is not found inside it with room to
     /// spare). Bounds looked up in `precomputed` do not use it.
     pub warm_start: Option<&'a [WarmStart]>,
+    /// Draw every ghost this way rather than each by the cheapest that keeps the frame within
+    /// `method_error_budget` ([`crate::method::choose`]).
+    pub method: Option<DrawMethod>,
+    /// The relative RMSE the choice of methods may add to the frame, in quadrature (the
+    /// preset's [`Quality::method_error_budget`]).
+    pub method_error_budget: f64,
 }
 
 impl<'a> PlanOptions<'a> {
@@ -279,6 +290,8 @@ impl<'a> PlanOptions<'a> {
             reflections: ReflectionOrder::Two,
             lens_tables: None,
             warm_start: None,
+            method: None,
+            method_error_budget: quality.method_error_budget(),
         }
     }
 }
@@ -509,9 +522,11 @@ impl<'p, 'o> Planner<'p, 'o> {
                 },
             )
             .collect();
+        let shares: Vec<f64> = kept.iter().map(|k| k.2).collect();
         for (((path, _, _), b), own) in kept.into_iter().zip(widened).zip(ghost_bins) {
             ghosts.push(self.ghost_job(path, b, &own, &job, &bins));
         }
+        self.choose_methods(&mut ghosts, &shares);
         // A four-reflection ghost's bound is all its energy might be, on the frame or not.
         culled_visible += bounded_out.iter().map(|d| d.energy_share).sum::<f64>();
         let seen = kept_visible + culled_visible;
@@ -628,6 +643,37 @@ impl<'p, 'o> Planner<'p, 'o> {
         Ok((found, not_in_table))
     }
 
+    /// Each ghost's method ([`crate::method`]): predicted from its triangles and drawn
+    /// rectangle, and its on-frame energy `shares` for its part of the frame's signal; chosen
+    /// within the error budget, or the one [`PlanOptions::method`] forces.
+    fn choose_methods(&self, ghosts: &mut [GhostJob], shares: &[f64]) {
+        let px = self.frame.pixel_mm();
+        let full_px = |g: &GhostJob| g.bounds.sensor.area() / (px * px);
+        let signal: Vec<f64> = ghosts
+            .iter()
+            .zip(shares)
+            .map(|(g, &e)| method::signal2(e, full_px(g)))
+            .collect();
+        let total: f64 = signal.iter().sum();
+        for (g, s) in ghosts.iter_mut().zip(&signal) {
+            let d = g.downscale.max(1) as f64;
+            let triangles = 2.0 * ((g.grid.max(2) - 1) as f64).powi(2);
+            let share = if total > 0.0 { s / total } else { 0.0 };
+            g.prediction = method::predict(triangles, g.bands.len(), full_px(g) / (d * d), share);
+        }
+        let methods = match self.opts.method {
+            Some(m) => vec![m; ghosts.len()],
+            None => {
+                let predictions: Vec<MethodPrediction> =
+                    ghosts.iter().map(|g| g.prediction).collect();
+                method::choose(&predictions, self.opts.method_error_budget)
+            }
+        };
+        for (g, m) in ghosts.iter_mut().zip(methods) {
+            g.method = m;
+        }
+    }
+
     /// A kept ghost's grid and coarse factor.
     fn grid_and_downscale(&self, b: &GhostBounds) -> (usize, usize) {
         let opts = self.opts;
@@ -702,6 +748,8 @@ impl<'p, 'o> Planner<'p, 'o> {
             downscale,
             bands: ghost_bands,
             energy_share: b.energy_share,
+            method: DrawMethod::Mesh,
+            prediction: MethodPrediction::default(),
         }
     }
 }

@@ -25,7 +25,7 @@ use flarebench_sdk::image::HdrImage;
 
 use crate::GhostRenderError;
 use crate::ghosts;
-use crate::plan::{self, LightPlan, PlanOptions};
+use crate::plan::{self, DrawMethod, LightPlan, PlanOptions};
 use crate::scene::{LightSpec, Quality};
 
 /// The reference draws every band on its own: no fringe model between it and the truth.
@@ -218,6 +218,9 @@ pub fn reference_options(reflections: ReflectionOrder) -> PlanOptions<'static> {
         reflections,
         lens_tables: None,
         warm_start: None,
+        // Exact coverage everywhere: the reference is what the other methods are measured by.
+        method: Some(DrawMethod::Mesh),
+        method_error_budget: 0.0,
     }
 }
 

@@ -1,9 +1,10 @@
 //! Ghost triangles ready to rasterize: [`Mesh`] (triangles with their corners' attributes),
 //! the attribute layouts of wholly open and edge triangles, [`GhostMesh`] (the open, edge and
-//! fringed meshes of any number of ghosts) and the coverage they are rasterized with
+//! fringed meshes and box splats of any number of ghosts) and the coverage they are rasterized with
 //! ([`SAMPLED_MIN_AREA`]).
 
 use super::fringe_table::FringeTable;
+use crate::raster::boxes::Boxes;
 
 /// Triangles with `N` attributes each, three vertices of their own per triangle.
 #[derive(Clone, Debug, Default)]
@@ -99,6 +100,8 @@ pub struct GhostMesh {
     /// pixel ([`super::fringe`]), and the ghosts' colour tables they index.
     pub fringe: Mesh<12>,
     pub fringe_tables: Vec<FringeTable>,
+    /// Box splats: the small triangles of ghosts drawn by splatting ([`super::splat`]).
+    pub boxes: Boxes,
 }
 
 impl GhostMesh {
@@ -109,6 +112,7 @@ impl GhostMesh {
             edge: Mesh::with_capacity(edge),
             fringe: Mesh::default(),
             fringe_tables: Vec::new(),
+            boxes: Boxes::default(),
         }
     }
 
@@ -118,16 +122,19 @@ impl GhostMesh {
         self.edge.clear();
         self.fringe.clear();
         self.fringe_tables.clear();
+        self.boxes.clear();
     }
 
     /// Makes room for the triangles of `meshes`.
     pub fn reserve<'a>(&mut self, meshes: impl Iterator<Item = &'a GhostMesh> + Clone) {
         let open: usize = meshes.clone().map(|m| m.open.len()).sum();
         let edge: usize = meshes.clone().map(|m| m.edge.len()).sum();
-        let fringe: usize = meshes.map(|m| m.fringe.len()).sum();
+        let fringe: usize = meshes.clone().map(|m| m.fringe.len()).sum();
+        let boxes: usize = meshes.map(|m| m.boxes.len()).sum();
         self.open.reserve(open);
         self.edge.reserve(edge);
         self.fringe.reserve(fringe);
+        self.boxes.reserve(boxes);
     }
 
     /// Adds every triangle of `other` after this mesh's own.
@@ -142,6 +149,28 @@ impl GhostMesh {
             a[11] += base;
         }
         self.fringe_tables.extend_from_slice(&other.fringe_tables);
+        self.boxes.append(&other.boxes);
+    }
+
+    /// Moves the box splats into the open mesh, each as two triangles of its irradiance: a
+    /// rasterizer with exact coverage draws them as `crate::raster::boxes` does (up to f32
+    /// rounding), which is how the GPU backend draws boxes.
+    pub fn boxes_into_open(&mut self) {
+        self.open.reserve(2 * self.boxes.len());
+        for (r, c) in self.boxes.rects.iter().zip(&self.boxes.irradiance) {
+            let [x0, y0, x1, y1] = *r;
+            self.open.push([[x0, y0], [x1, y0], [x1, y1]], [*c; 3]);
+            self.open.push([[x0, y0], [x1, y1], [x0, y1]], [*c; 3]);
+        }
+        self.boxes.clear();
+    }
+
+    /// True without triangles or boxes.
+    pub fn is_empty(&self) -> bool {
+        self.open.is_empty()
+            && self.edge.is_empty()
+            && self.fringe.is_empty()
+            && self.boxes.is_empty()
     }
 }
 

@@ -11,7 +11,10 @@
 //!   what it reports (`GhostStats`).
 //! - [`triangles`]: a traced band's grid cells as triangles with energy-conserving
 //!   intensities, the diffraction-limit caustic bound, the feathered edge's width.
-//! - [`mesh`]: ghost triangles ready to rasterize (open, edge and fringed meshes).
+//! - [`mesh`]: ghost triangles ready to rasterize (open, edge and fringed meshes, box
+//!   splats).
+//! - [`splat`]: a splatted ghost's small triangles cut into pieces drawn as boxes, where
+//!   exact coverage would cost most of its time.
 //! - `row_split`: where along a rasterized row a shade is zero or open, shared by the
 //!   shaders.
 //! - [`render`]: one ghost into an HDR image — mesh its bands, rasterize with the aperture's
@@ -41,6 +44,7 @@ pub mod olf_table;
 pub mod render;
 mod row_split;
 pub mod sink;
+pub mod splat;
 pub mod table;
 pub mod triangles;
 

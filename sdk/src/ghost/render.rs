@@ -19,6 +19,7 @@
 
 use crate::aperture::Aperture;
 use crate::image::HdrImage;
+use crate::raster::boxes::splat_boxes_into;
 use crate::raster::{Coverage, RowSplit, Shader, rasterize_into, rasterize_shaded_into};
 
 use super::context::{BandRef, GhostContext, GhostGrid, GhostStats};
@@ -59,6 +60,30 @@ pub fn mesh_ghost(
     grid: &mut GridTrace,
     mesh: &mut GhostMesh,
 ) -> GhostStats {
+    mesh_or_splat_ghost(ctx, ghost, bands, grid, mesh, false)
+}
+
+/// [`mesh_ghost`], its triangles that exact coverage would draw (small and compact:
+/// [`super::splat::splat_area`]) added to `mesh.boxes` as box splats instead
+/// ([`super::splat`]).
+pub fn splat_ghost(
+    ctx: &GhostContext<'_>,
+    ghost: &GhostGrid<'_>,
+    bands: &[BandRef<'_>],
+    grid: &mut GridTrace,
+    mesh: &mut GhostMesh,
+) -> GhostStats {
+    mesh_or_splat_ghost(ctx, ghost, bands, grid, mesh, true)
+}
+
+fn mesh_or_splat_ghost(
+    ctx: &GhostContext<'_>,
+    ghost: &GhostGrid<'_>,
+    bands: &[BandRef<'_>],
+    grid: &mut GridTrace,
+    mesh: &mut GhostMesh,
+    splat: bool,
+) -> GhostStats {
     let GhostGrid {
         path,
         bounds,
@@ -72,7 +97,7 @@ pub fn mesh_ghost(
             return stats;
         }
         stats.rays += n * n;
-        let emit = BandTriangles::new(ctx, n, light, band, &aperture, grid);
+        let emit = BandTriangles::new(ctx, n, light, band, &aperture, grid).splatted(splat);
         for tri in grid_triangles(n) {
             emit.push(tri, mesh, &mut stats);
         }
@@ -82,7 +107,7 @@ pub fn mesh_ghost(
 
 /// Rasterizes `mesh` (made by [`mesh_ghost`] for a frame of `img`'s size) into `img`: the open
 /// triangles at their interpolated irradiance, the edge ones feathered at the clip radius
-/// and, where flagged, at `aperture`'s outline. Triangles of at least [`SAMPLED_MIN_AREA`]
+/// and, where flagged, at `aperture`'s outline, and the box splats. Triangles of at least [`SAMPLED_MIN_AREA`]
 /// pixels² are point-sampled.
 pub fn rasterize_ghost_mesh(img: &mut HdrImage, mesh: &GhostMesh, aperture: &Aperture) {
     rasterize_ghost_mesh_into(&mut img.pixels, img.width, mesh, aperture);
@@ -140,6 +165,7 @@ pub fn rasterize_ghost_mesh_with(
         };
         rasterize_edges(pixels, width, &mesh.edge, coverage, &shader);
     }
+    splat_boxes_into(pixels, width, &mesh.boxes);
     // The circle's outline analytically, another aperture's stepped over τ (`super::fringe`).
     if !mesh.fringe.is_empty() {
         let fringe = &mesh.fringe;
@@ -156,6 +182,20 @@ pub fn rasterize_ghost_mesh_with(
             },
         );
     }
+}
+
+/// The shade of an edge triangle's point with attributes `a` ([`EdgeAttrs`]): its irradiance
+/// times the clip radius's feathered step and, where flagged, `aperture(u, v, feather)` (the
+/// aperture's soft transmission). The rasterizer's per pixel, a splat's per piece
+/// ([`super::splat`]).
+#[inline]
+pub(crate) fn edge_shade(a: &EdgeAttrs, aperture: &impl Fn(f32, f32, f32) -> f32) -> [f32; 3] {
+    let feather = a[6];
+    let mut t = smoothstep(1.0 + 0.5 * feather, 1.0 - 0.5 * feather, a[5]);
+    if a[7] > 0.5 {
+        t *= aperture(a[3], a[4], feather);
+    }
+    [a[0] * t, a[1] * t, a[2] * t]
 }
 
 /// Rasterizes edge triangles with `shader`.
@@ -190,12 +230,7 @@ impl<A: Fn(f32, f32, f32) -> f32 + Sync> Shader<8> for EdgeShader<A> {
 
     #[inline]
     fn shade(&self, a: &EdgeAttrs) -> [f32; 3] {
-        let feather = a[6];
-        let mut t = smoothstep(1.0 + 0.5 * feather, 1.0 - 0.5 * feather, a[5]);
-        if a[7] > 0.5 {
-            t *= (self.aperture)(a[3], a[4], feather);
-        }
-        [a[0] * t, a[1] * t, a[2] * t]
+        edge_shade(a, &self.aperture)
     }
 
     /// The clip radius `a[5]` is affine along the row, and for the circle `u² + v²` is a

@@ -12,7 +12,9 @@ use super::bounds::GhostBounds;
 use super::context::{BandRef, GhostContext, GhostLight, GhostStats};
 use super::enumerate::GhostPath;
 use super::grid::{GridTrace, trace_grid, trace_grid_f64};
-use super::mesh::GhostMesh;
+use super::mesh::{EdgeAttrs, GhostMesh};
+use super::render::edge_shade;
+use super::splat::{splat_area, splat_triangle};
 
 /// Traces `path` at `band` into `grid` (f32 or f64 as `ctx` says); false when the path has
 /// no sequence at this wavelength.
@@ -75,6 +77,8 @@ pub(crate) struct BandTriangles<'a> {
     sin_cos_phi: (f64, f64),
     convex: bool,
     aperture: &'a ApertureSampler<'a>,
+    /// Small triangles drawn as box splats ([`super::splat`]) rather than meshed.
+    splat: bool,
 }
 
 impl<'a> BandTriangles<'a> {
@@ -103,7 +107,13 @@ impl<'a> BandTriangles<'a> {
             sin_cos_phi: light.phi.sin_cos(),
             convex: aperture.is_convex(),
             aperture,
+            splat: false,
         }
+    }
+
+    /// The same, drawing its small triangles as box splats ([`super::splat`]) when `splat`.
+    pub(crate) fn splatted(self, splat: bool) -> Self {
+        BandTriangles { splat, ..self }
     }
 
     /// Where vertex `k` landed (sensor mm, the lens's frame: the grid is traced with the light
@@ -252,19 +262,35 @@ impl<'a> BandTriangles<'a> {
         } else {
             radius_open && self.open_around(uv, wide)
         };
+        let splat = if self.splat {
+            splat_area(&pixels)
+        } else {
+            None
+        };
         if radius_open && aperture_open {
-            mesh.open.push(pixels, tri.map(colour));
+            let attrs = tri.map(colour);
+            match splat {
+                Some(area) => {
+                    splat_triangle(&pixels, &attrs, area, |a| *a, &mut mesh.boxes);
+                }
+                None => mesh.open.push(pixels, attrs),
+            }
         } else {
             let flag = if aperture_open { 0.0 } else { 1.0 };
             let feather = feathers.drawn(radius_open, aperture_open);
-            mesh.edge.push(
-                pixels,
-                std::array::from_fn(|c| {
-                    let [red, green, blue] = colour(tri[c]);
-                    let [u, v] = uv[c];
-                    [red, green, blue, u, v, r[c] as f32, feather, flag]
-                }),
-            );
+            let attrs: [EdgeAttrs; 3] = std::array::from_fn(|c| {
+                let [red, green, blue] = colour(tri[c]);
+                let [u, v] = uv[c];
+                [red, green, blue, u, v, r[c] as f32, feather, flag]
+            });
+            match splat {
+                Some(area) => {
+                    let aperture = |u, v, f| self.aperture.transmission_soft(u, v, f);
+                    let shade = |a: &EdgeAttrs| edge_shade(a, &aperture);
+                    splat_triangle(&pixels, &attrs, area, shade, &mut mesh.boxes);
+                }
+                None => mesh.edge.push(pixels, attrs),
+            }
         }
         Some(self.flux(tri))
     }

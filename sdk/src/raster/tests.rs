@@ -288,9 +288,10 @@ fn every_pixel_matches_clipping_the_triangle_to_it() {
         seed ^= seed << 17;
         lo + (hi - lo) * ((seed >> 40) as f32 / (1u64 << 24) as f32)
     };
-    for case in 0..300 {
-        // Small, medium and large triangles, some past the borders.
-        let size = [2.0, 12.0, 90.0][case % 3];
+    for case in 0..400 {
+        // Tiny (often inside one pixel), small, medium and large triangles, some past the
+        // borders.
+        let size = [0.3, 2.0, 12.0, 90.0][case % 4];
         let (cx, cy) = (rnd(-5.0, 75.0), rnd(-5.0, 45.0));
         let pts: Vec<[f32; 2]> = (0..3)
             .map(|_| [cx + rnd(-size, size), cy + rnd(-size, size)])

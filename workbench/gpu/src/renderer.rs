@@ -12,6 +12,7 @@ use flarebench_sdk::ghost::mesh::{GhostMesh, Mesh, SAMPLED_MIN_AREA};
 use flarebench_sdk::ghost::sink::{FrameLevels, GhostSink};
 use flarebench_sdk::image::{CoarseGrid, HdrImage};
 use flarebench_sdk::raster::Coverage;
+use flarebench_sdk::raster::boxes::Boxes;
 use flarebench_sdk::starburst::StarburstSplat;
 
 use crate::buffers::GrowBuffer;
@@ -305,8 +306,11 @@ impl GhostRenderer {
         ];
         self.report.fragments += fragments(&mesh.open, self.min_area)
             + fragments(&mesh.edge, self.min_area)
-            + fragments(&mesh.fringe, self.min_area);
+            + fragments(&mesh.fringe, self.min_area)
+            + box_fragments(&mesh.boxes);
         self.staging.append(mesh);
+        // Boxes are drawn as pairs of open triangles with exact coverage.
+        self.staging.boxes_into_open();
         let after = [
             self.staging.open.len(),
             self.staging.edge.len(),
@@ -511,6 +515,17 @@ fn fragments<const N: usize>(mesh: &Mesh<N>, min_area: f32) -> u64 {
         };
     }
     total as u64
+}
+
+/// The fragments `boxes` make drawn as triangles: the whole pixels each one's rectangle
+/// touches.
+fn box_fragments(boxes: &Boxes) -> u64 {
+    boxes
+        .rects
+        .iter()
+        .filter(|r| r.iter().all(|v| v.is_finite()))
+        .map(|r| f64::from((r[2].ceil() - r[0].floor()) * (r[3].ceil() - r[1].floor())))
+        .sum::<f64>() as u64
 }
 
 fn clear_attachment(view: &wgpu::TextureView) -> wgpu::RenderPassColorAttachment<'_> {
