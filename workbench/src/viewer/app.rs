@@ -20,9 +20,8 @@ use super::lens_view::{self, LensCamera, LensOverlay};
 use super::plugins::{PluginWatcher, SharedWaker, ViewerAlgo, WatchEvent};
 use super::status;
 use crate::algo_spec::Algo;
-use crate::backend::BackendChoice;
-use crate::cli::render::StarburstMode;
 use crate::document::Change;
+use crate::flare::{BackendChoice, StarburstMode};
 use crate::lens_drawing::{self, LensDrawing, RayFan};
 use crate::link::{FromEditor, ToEditor};
 
