@@ -602,8 +602,21 @@ impl Viewer {
                 ui.label(status::help_line());
             });
         });
+        let hovered = self.hovered_description();
         egui::Panel::bottom("viewer-status").show(ui, |ui| {
-            status::show(ui, self);
+            status::show(
+                ui,
+                status::StatusState {
+                    message: self.message.as_deref(),
+                    frame: self.shown.as_ref(),
+                    selected_ghost: self.selected_ghost,
+                    solo: self.scene.solo.is_some(),
+                    debug_view: self.debug_view,
+                    algos: self.algos(),
+                    active_algo: self.active_algo(),
+                    hovered: hovered.as_deref(),
+                },
+            );
         });
         let half = (ui.available_width() * 0.42).max(120.0);
         egui::Panel::left("viewer-lens")
@@ -626,7 +639,18 @@ impl Viewer {
                 }
             });
         egui::CentralPanel::default().show(ui, |ui| {
-            let (rect, action) = flare_view::show(ui, self);
+            let state = flare_view::FlareViewState {
+                system: &self.system,
+                width: self.scene.width,
+                height: self.scene.height,
+                texture: self.texture.as_ref(),
+                shown: self.shown.as_ref(),
+                selected_ghost: self.selected_ghost,
+                labels: self.labels,
+                debug_view: self.debug_view,
+                debug_state: self.debug_state(),
+            };
+            let (rect, action) = flare_view::show(ui, state);
             self.log_rect(1, "flare", rect);
             self.apply(action);
         });
