@@ -15,6 +15,9 @@
 //! - [`image`] and [`raster`]: linear HDR images and the exact-coverage CPU triangle rasterizer.
 //! - [`frame`]: the output image's pixels ↔ the part of the sensor it shows ([`Frame`]).
 //! - [`spectrum`]: the d, F and C line wavelengths.
+//! - [`rect`], [`ghost_path`] and [`fingerprint`]: the rectangle, the ghost path and the lens
+//!   fingerprint, shared by `trace`, `io` and `ghost` so that neither of the first two depends on
+//!   `ghost` (the layers are in `tests/layering.rs`).
 //! - [`ghost`]: ghost paths, their traced grids and bounds, bounds tables, the four-reflection
 //!   energy bound, and meshing a ghost for the rasterizer.
 //! - [`starburst`]: the Fraunhofer diffraction starburst of the aperture.
@@ -30,15 +33,18 @@ pub mod abi;
 pub mod aperture;
 pub mod coating;
 pub mod color;
+pub mod fingerprint;
 pub mod frame;
 pub mod fresnel;
 pub mod ghost;
+pub mod ghost_path;
 pub mod glass;
 pub mod hash;
 pub mod image;
 pub mod io;
 pub mod paraxial;
 pub mod raster;
+pub mod rect;
 pub mod spectrum;
 pub mod starburst;
 pub mod system;

@@ -23,7 +23,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use flarebench::backend::BackendChoice;
+use flarebench::flare::backend::BackendChoice;
 use flarebench::lens_drawing::{self, LensDrawing};
 use flarebench::viewer::offscreen::Offscreen;
 use flarebench::viewer::{Viewer, ViewerOptions};

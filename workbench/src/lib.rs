@@ -4,13 +4,12 @@
 
 pub mod algo_spec;
 pub mod aperture_file;
-pub mod backend;
 pub mod cli;
-pub mod compose;
 pub mod document;
 #[cfg(feature = "tui")]
 pub mod edit;
 pub mod file_watch;
+pub mod flare;
 pub mod input_image;
 pub mod label;
 pub mod lens_drawing;
@@ -30,3 +29,7 @@ pub mod sweep;
 pub mod table;
 #[cfg(feature = "window")]
 pub mod viewer;
+
+// The backend and composition modules' earlier paths (`flarebench::backend`,
+// `flarebench::compose`), kept for code written against them.
+pub use flare::{backend, compose};

@@ -2,11 +2,12 @@
 
 use serde::Serialize;
 
-use crate::backend::BackendReport;
-use crate::compose::StarburstLine;
+use crate::flare::backend::BackendReport;
+use crate::flare::compose::StarburstLine;
 
 use flarebench_sdk::ghost::ReflectionOrder;
 use flarebench_sdk::ghost::context::GhostStats;
+use flarebench_sdk::image::HdrImage;
 use ghost_raytrace::plan::{DropReason, FourReflectionSummary, LightPlan};
 
 /// Time spent per stage (milliseconds).
@@ -30,6 +31,18 @@ pub struct ErrorReport {
     pub relative_l1: f64,
     /// (Σa − Σb) / Σb.
     pub energy_error: f64,
+}
+
+impl ErrorReport {
+    /// The error of `img` against `reference` (the same size).
+    pub fn between(img: &HdrImage, reference: &HdrImage) -> anyhow::Result<ErrorReport> {
+        let c = img.compare(reference)?;
+        Ok(ErrorReport {
+            relative_rmse: c.relative_rmse,
+            relative_l1: c.relative_l1,
+            energy_error: c.energy_error,
+        })
+    }
 }
 
 #[derive(Clone, Debug, Serialize)]

@@ -403,7 +403,7 @@ fn viewer_until(
 #[test]
 fn the_window_reloads_a_rebuilt_plugin_and_renders_with_its_new_default() {
     use flarebench::algo_spec::Algo;
-    use flarebench::backend::BackendChoice;
+    use flarebench::flare::backend::BackendChoice;
     use flarebench::viewer::{StarburstMode, Viewer, ViewerOptions};
     use ghost_raytrace::scene::{LightSpec, Quality};
 

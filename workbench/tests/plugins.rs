@@ -237,7 +237,7 @@ const OTHER_IMAGE_MIN_RMSE: f64 = 1e-2;
 
 #[test]
 fn the_starburst_plugin_renders_what_render_composes() {
-    use flarebench::compose::{StarburstSetup, add_starbursts};
+    use flarebench::flare::compose::{StarburstSetup, add_starbursts};
     use flarebench_sdk::abi::author::Scene;
     use flarebench_sdk::abi::host;
     use flarebench_sdk::abi::params::parse_values;

@@ -14,8 +14,8 @@ use std::sync::mpsc::channel;
 use std::time::Duration;
 
 use egui::{Event, PointerButton, Pos2, pos2};
-use flarebench::backend::BackendChoice;
 use flarebench::document::{Document, Edit};
+use flarebench::flare::backend::BackendChoice;
 use flarebench::link::{FromEditor, ToEditor};
 use flarebench::viewer::offscreen::Offscreen;
 use flarebench::viewer::{EditorLink, Viewer, ViewerOptions};

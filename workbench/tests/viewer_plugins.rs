@@ -13,7 +13,7 @@ use std::sync::mpsc::{Receiver, channel};
 use std::time::{Duration, Instant};
 
 use flarebench::algo_spec::Algo;
-use flarebench::backend::{BackendChoice, GhostBackend};
+use flarebench::flare::backend::{BackendChoice, GhostBackend};
 use flarebench::link::{FromEditor, ToEditor};
 use flarebench::viewer::flare_worker::view_frame;
 use flarebench::viewer::offscreen::Offscreen;
@@ -243,7 +243,7 @@ fn a_rewritten_plugin_library_is_reloaded_and_a_broken_one_keeps_the_previous_wi
             && message.contains(lib.to_str().unwrap()),
         "{message}"
     );
-    let (line, error) = status::renderer_line(&viewer).unwrap();
+    let (line, error) = status::renderer_line(viewer.algos(), viewer.active_algo()).unwrap();
     assert!(
         line.contains("`example-glow`") && line.contains("reload 1"),
         "{line}"

@@ -963,9 +963,6 @@ pub fn dim_threshold(shares: impl Iterator<Item = f64>, budget: f64) -> f64 {
 /// 0.85) to 2.01%.
 pub const SMOOTH_GRID: usize = 19;
 
-/// Largest coarse-frame factor of the presets (`Quality::max_downscale`).
-pub const MAX_DOWNSCALE: usize = 16;
-
 /// Coarse pixels a grid cell must span at least: the ghost's irradiance is interpolated
 /// linearly across each triangle, so a coarse pixel of a quarter cell resolves it.
 pub const COARSE_PIXELS_PER_CELL: f64 = 4.0;

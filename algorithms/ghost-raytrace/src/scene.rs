@@ -7,6 +7,9 @@ use flarebench_sdk::color::LightSpectrum;
 
 use crate::error::LightSpecError;
 
+/// Largest coarse-frame factor of the presets (`Quality::max_downscale`).
+pub const MAX_DOWNSCALE: usize = 16;
+
 /// A light at infinity.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LightSpec {
@@ -199,7 +202,7 @@ impl Quality {
     /// 7% (Heliar) and 12% (Nikon zoom) longer.
     pub fn max_downscale(self) -> usize {
         match self {
-            Quality::Fast => crate::plan::MAX_DOWNSCALE,
+            Quality::Fast => MAX_DOWNSCALE,
             Quality::Default => 8,
             Quality::High => 8,
         }

@@ -4,7 +4,7 @@
 
 use crate::trace::{LANES, Probe, RayBatch, Real, Sequence};
 
-use super::bounds::Rect;
+use crate::rect::Rect;
 
 /// The traced grid, in the meridional frame (light in the y–z plane); rotate the sensor
 /// positions by the light's azimuth. Vertex `(i, j)` (i along x, j along y) is at `j * n + i`.

@@ -54,8 +54,8 @@ use crate::image::HdrImage;
 use crate::system::LensSystem;
 use crate::trace::{Hit, Ray, Sequence};
 
-use super::bounds::Rect;
-use super::enumerate::GhostPath;
+use crate::ghost_path::GhostPath;
+use crate::rect::Rect;
 
 /// Luminance weights of linear sRGB (Rec. 709), as the renderer counts a band's flux.
 const LUMINANCE: [f64; 3] = [0.2126, 0.7152, 0.0722];

@@ -74,10 +74,7 @@ impl Default for TableOptions {
     }
 }
 
-/// FNV-1a (64 bit) of the lens's canonical XML, as hex.
-pub fn fingerprint(system: &LensSystem) -> String {
-    crate::hash::fnv1a_hex(crate::io::write_xml(system).as_bytes())
-}
+pub use crate::fingerprint::fingerprint;
 
 /// The largest angle a table covers by default (degrees): half the film diagonal's field (at
 /// the d line's focal length) plus 10°, at most 89°.

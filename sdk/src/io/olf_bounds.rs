@@ -17,7 +17,8 @@ use super::LensFileError;
 use super::located::Reporter;
 use super::text;
 use super::xml_tree::{self, Node};
-use crate::ghost::{GhostPath, Rect};
+use crate::ghost_path::GhostPath;
+use crate::rect::Rect;
 
 /// The whole file: one entry per incidence angle, in increasing angle.
 #[derive(Clone, Debug, PartialEq)]

@@ -1,7 +1,7 @@
 //! Interaction sequences: which surfaces a ray meets, in what order, and how.
 
 use super::real::Real;
-use crate::ghost::GhostPath;
+use crate::ghost_path::GhostPath;
 use crate::system::{Coating, LensSystem, SurfaceKind};
 
 /// What happens at a step.

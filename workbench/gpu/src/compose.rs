@@ -8,6 +8,7 @@ use flarebench_sdk::frame::Frame;
 use flarebench_sdk::starburst::{SplatGeometry, StarburstPattern, StarburstSplat};
 
 use crate::buffers::GrowBuffer;
+use crate::pipelines::{additive_target, pipeline};
 use crate::targets::AccumFormat;
 use crate::uniforms::{BLOCK_STRIDE, strided};
 use crate::{GpuContext, GpuError};
@@ -81,47 +82,6 @@ fn layout_entries(second: wgpu::BindingType) -> [wgpu::BindGroupLayoutEntry; 2] 
     ]
 }
 
-/// A render pipeline of one module's vertex and fragment entries (`entries`), one bind group
-/// (`layout`) and one colour target, drawing whole triangles without vertex buffers.
-pub(crate) fn pipeline(
-    device: &wgpu::Device,
-    layout: &wgpu::BindGroupLayout,
-    source: &str,
-    entries: (&str, &str),
-    target: wgpu::ColorTargetState,
-) -> wgpu::RenderPipeline {
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some(entries.1),
-        source: wgpu::ShaderSource::Wgsl(source.into()),
-    });
-    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some(entries.1),
-        bind_group_layouts: &[Some(layout)],
-        immediate_size: 0,
-    });
-    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some(entries.1),
-        layout: Some(&pipeline_layout),
-        vertex: wgpu::VertexState {
-            module: &module,
-            entry_point: Some(entries.0),
-            compilation_options: Default::default(),
-            buffers: &[],
-        },
-        primitive: wgpu::PrimitiveState::default(),
-        depth_stencil: None,
-        multisample: wgpu::MultisampleState::default(),
-        fragment: Some(wgpu::FragmentState {
-            module: &module,
-            entry_point: Some(entries.1),
-            compilation_options: Default::default(),
-            targets: &[Some(target)],
-        }),
-        multiview_mask: None,
-        cache: None,
-    })
-}
-
 impl Compositor {
     /// The passes, the starburst pass adding into linear targets of `format`.
     pub fn new(device: &wgpu::Device, format: AccumFormat) -> Compositor {
@@ -146,7 +106,7 @@ impl Compositor {
             &splat_layout,
             include_str!("shaders/starburst.wgsl"),
             ("vs_splat", "fs_splat"),
-            crate::pipelines::additive_target(format),
+            additive_target(format),
         );
         let tone = pipeline(
             device,

@@ -1,5 +1,6 @@
 //! The render pipelines and their bind group layouts: one raster pipeline per kind of ghost
-//! triangle (wholly open, edge, fringed), and the upsampling pass.
+//! triangle (wholly open, edge, fringed), and the upsampling pass; the constructors of the
+//! full-frame pipelines the compositor draws with too (`pipeline`, `additive_target`).
 
 use crate::targets::AccumFormat;
 
@@ -116,6 +117,47 @@ pub(crate) fn additive_target(format: AccumFormat) -> wgpu::ColorTargetState {
     }
 }
 
+/// A render pipeline of one module's vertex and fragment entries (`entries`), one bind group
+/// (`layout`) and one colour target, drawing whole triangles without vertex buffers.
+pub(crate) fn pipeline(
+    device: &wgpu::Device,
+    layout: &wgpu::BindGroupLayout,
+    source: &str,
+    entries: (&str, &str),
+    target: wgpu::ColorTargetState,
+) -> wgpu::RenderPipeline {
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(entries.1),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    });
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(entries.1),
+        bind_group_layouts: &[Some(layout)],
+        immediate_size: 0,
+    });
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(entries.1),
+        layout: Some(&pipeline_layout),
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some(entries.0),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        primitive: wgpu::PrimitiveState::default(),
+        depth_stencil: None,
+        multisample: wgpu::MultisampleState::default(),
+        fragment: Some(wgpu::FragmentState {
+            module: &module,
+            entry_point: Some(entries.1),
+            compilation_options: Default::default(),
+            targets: &[Some(target)],
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
 impl Pipelines {
     /// The pipelines drawing into targets of `format`.
     pub fn new(device: &wgpu::Device, format: AccumFormat) -> Pipelines {
@@ -182,7 +224,7 @@ impl Pipelines {
                 format,
             ),
         ];
-        let upsample = crate::compose::pipeline(
+        let upsample = pipeline(
             device,
             &upsample_layout,
             include_str!("shaders/upsample.wgsl"),

@@ -20,20 +20,20 @@
 use std::path::PathBuf;
 
 use clap::Args;
+use flarebench_sdk::LensSystem;
 use flarebench_sdk::color::LightSpectrum;
 use flarebench_sdk::frame::Frame;
 use flarebench_sdk::ghost::GridTrace;
 use flarebench_sdk::ghost::bounds::direct_flux;
 use flarebench_sdk::image::HdrImage;
-use flarebench_sdk::starburst::StarburstCache;
 use flarebench_sdk::trace::InterfaceTableSet;
-use ghost_raytrace::plan::{self, PlanOptions};
+use ghost_raytrace::plan::PlanOptions;
 use ghost_raytrace::scene::{LightSpec, Quality};
 use serde::Serialize;
 
-use super::render::{IrisArgs, StarburstArgs, StarburstMode};
-use crate::backend::{BackendChoice, BackendReport, GhostBackend};
-use crate::compose::{StarburstLine, StarburstSetup, add_onto};
+use super::render::{IrisArgs, StarburstArgs};
+use crate::flare::compose::{StarburstLine, add_onto};
+use crate::flare::{BackendChoice, BackendReport, Flare, Preset, Scene};
 use crate::input_image::read_input_image;
 use crate::lens_library;
 use crate::output::{ExrPrecision, OutputFormat, ToneMap, ToneOperator, save_image_as};
@@ -120,7 +120,7 @@ struct ApplyReport {
     /// With a PNG output: how many pixels away from the lights ([`AWAY_FROM_LIGHT_PX`]) the
     /// flare changes by at least one 8-bit step (`null` for EXR output).
     changed_pixels: Option<usize>,
-    /// Where the ghosts were drawn (`crate::backend`).
+    /// Where the ghosts were drawn (`crate::flare::backend`).
     backend: BackendReport,
 }
 
@@ -155,78 +155,21 @@ pub fn run(args: &ApplyArgs, quiet: bool) -> anyhow::Result<()> {
         "--threshold must be positive, got {threshold}"
     );
     let aperture = args.iris.aperture()?;
-    let (settings, dust) = args.starburst.load()?;
+    let (starburst_settings, dust) = args.starburst.load()?;
+    let found = lights_of(sys, &frame, bg, threshold, args.max_lights, gain);
 
-    let tables = InterfaceTableSet::for_system(sys, 550.0);
-    let mut scratch = GridTrace::default();
-    let mut lights = Vec::new();
-    let mut applied = Vec::new();
-    let mut skipped = Vec::new();
-    for s in find_sources(bg, threshold, args.max_lights) {
-        let [px, py] = s.centroid_px;
-        match direction_of(sys, &frame, px, py) {
-            Ok((theta_deg, phi_deg)) => {
-                let flux = direct_flux(sys, &tables, theta_deg.to_radians(), &mut scratch);
-                if flux.is_nan() || flux <= 0.0 {
-                    skipped.push((s, "no light reaches the sensor from there".to_string()));
-                    continue;
-                }
-                let intensity = gain * s.energy / flux;
-                let c = s.colour.map(|v| v.max(0.0) as f32);
-                let spectrum = if LightSpectrum::Rgb(c).validate().is_ok() {
-                    LightSpectrum::Rgb(c)
-                } else {
-                    LightSpectrum::D65
-                };
-                lights.push(LightSpec {
-                    theta_deg,
-                    phi_deg,
-                    intensity,
-                    spectrum,
-                });
-                applied.push(AppliedLight {
-                    source: s,
-                    theta_deg,
-                    phi_deg,
-                    gain,
-                    intensity,
-                });
-            }
-            Err(e) => skipped.push((s, format!("{e:#}"))),
-        }
-    }
-
-    let mode = args.starburst.starburst;
-    let opts = PlanOptions::for_quality(args.quality, None);
-    let plans = if mode == StarburstMode::Only || lights.is_empty() {
-        Vec::new()
-    } else {
-        plan::plan(sys, &lights, &frame, &opts)?
+    let scene = Scene {
+        starburst: args.starburst.starburst,
+        starburst_settings,
+        dust: dust.as_ref(),
+        ..Scene::new(sys, &found.lights, &aperture, frame)
     };
-    let mut backend = GhostBackend::open(args.backend)?;
-    let (mut flare, _) = backend.render(sys, &aperture, frame, &plans, Default::default())?;
-    let starbursts = if mode == StarburstMode::Off {
-        Vec::new()
-    } else {
-        let setup = StarburstSetup {
-            aperture: &aperture,
-            dust: dust.as_ref(),
-            settings,
-        };
-        backend.add_starbursts(
-            &mut flare,
-            sys,
-            &frame,
-            &lights,
-            &setup,
-            &mut StarburstCache::new(),
-        )?
-    };
-    anyhow::ensure!(
-        !flare.has_non_finite(),
-        "internal error: the flare has non-finite pixels"
-    );
-    let out = add_onto(bg, &flare)?;
+    let mut flare = Flare::open(args.backend)?;
+    let rendered = flare.render(
+        &scene,
+        &Preset::new(PlanOptions::for_quality(args.quality, None)),
+    )?;
+    let out = add_onto(bg, flare.image())?;
     let tone = ToneMap {
         exposure_ev: args.exposure_ev.unwrap_or(0.0),
         operator: args.tone.unwrap_or(ToneOperator::Clamp),
@@ -238,7 +181,7 @@ pub fn run(args: &ApplyArgs, quiet: bool) -> anyhow::Result<()> {
     };
     save_image_as(&out, &args.output, &tone, precision)?;
     let changed_pixels = (OutputFormat::from_path(&args.output)? == OutputFormat::Png)
-        .then(|| changed_away_from_lights(bg, &out, &applied, &tone));
+        .then(|| changed_away_from_lights(bg, &out, &found.applied, &tone));
 
     let report = ApplyReport {
         lens: sys.name.clone(),
@@ -248,17 +191,94 @@ pub fn run(args: &ApplyArgs, quiet: bool) -> anyhow::Result<()> {
         height: bg.height,
         hdr: input.hdr,
         threshold,
-        ghosts_traced: plans.iter().map(|p| p.ghosts.len()).sum(),
+        ghosts_traced: rendered.ghosts_drawn(),
         changed_pixels,
-        lights: applied,
-        skipped,
-        starbursts,
-        backend: backend.report().clone(),
+        lights: found.applied,
+        skipped: found.skipped,
+        starbursts: rendered.starbursts,
+        backend: flare.backend().report().clone(),
     };
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else if !quiet {
-        for l in &report.lights {
+        report.print(&args.output);
+    }
+    if !quiet && !report.lights.is_empty() && report.changed_pixels == Some(0) {
+        eprintln!(
+            "warning: the flare changes no pixel more than {AWAY_FROM_LIGHT_PX} px from the \
+             lights by one 8-bit step (gain {gain}): raise --gain or --exposure-ev to see it"
+        );
+    }
+    Ok(())
+}
+
+/// The lights found in an image, the sources they came from and those left out.
+struct FoundLights {
+    lights: Vec<LightSpec>,
+    applied: Vec<AppliedLight>,
+    skipped: Vec<(Source, String)>,
+}
+
+/// The bright sources of `bg` (`sources::find_sources`) as lights: each aimed by the chief
+/// ray at its centroid, coloured by its mean, as intense as its energy × `gain` through the
+/// lens (module docs).
+fn lights_of(
+    sys: &LensSystem,
+    frame: &Frame,
+    bg: &HdrImage,
+    threshold: f32,
+    max_lights: usize,
+    gain: f64,
+) -> FoundLights {
+    let tables = InterfaceTableSet::for_system(sys, 550.0);
+    let mut scratch = GridTrace::default();
+    let mut found = FoundLights {
+        lights: Vec::new(),
+        applied: Vec::new(),
+        skipped: Vec::new(),
+    };
+    for s in find_sources(bg, threshold, max_lights) {
+        let [px, py] = s.centroid_px;
+        match direction_of(sys, frame, px, py) {
+            Ok((theta_deg, phi_deg)) => {
+                let flux = direct_flux(sys, &tables, theta_deg.to_radians(), &mut scratch);
+                if flux.is_nan() || flux <= 0.0 {
+                    found
+                        .skipped
+                        .push((s, "no light reaches the sensor from there".to_string()));
+                    continue;
+                }
+                let intensity = gain * s.energy / flux;
+                let c = s.colour.map(|v| v.max(0.0) as f32);
+                let spectrum = if LightSpectrum::Rgb(c).validate().is_ok() {
+                    LightSpectrum::Rgb(c)
+                } else {
+                    LightSpectrum::D65
+                };
+                found.lights.push(LightSpec {
+                    theta_deg,
+                    phi_deg,
+                    intensity,
+                    spectrum,
+                });
+                found.applied.push(AppliedLight {
+                    source: s,
+                    theta_deg,
+                    phi_deg,
+                    gain,
+                    intensity,
+                });
+            }
+            Err(e) => found.skipped.push((s, format!("{e:#}"))),
+        }
+    }
+    found
+}
+
+impl ApplyReport {
+    /// What was found and written, on stderr.
+    fn print(&self, output: &std::path::Path) {
+        for l in &self.lights {
             eprintln!(
                 "light at pixel ({:.1}, {:.1}), {} px, energy {:.4e} × gain {}: θ {:.3}°, φ {:.2}°",
                 l.source.centroid_px[0],
@@ -270,7 +290,7 @@ pub fn run(args: &ApplyArgs, quiet: bool) -> anyhow::Result<()> {
                 l.phi_deg
             );
         }
-        for (s, why) in &report.skipped {
+        for (s, why) in &self.skipped {
             eprintln!(
                 "skipped the source at pixel ({:.1}, {:.1}): {why}",
                 s.centroid_px[0], s.centroid_px[1]
@@ -278,18 +298,11 @@ pub fn run(args: &ApplyArgs, quiet: bool) -> anyhow::Result<()> {
         }
         eprintln!(
             "wrote {} ({} lights, {} ghosts)",
-            args.output.display(),
-            report.lights.len(),
-            report.ghosts_traced
+            output.display(),
+            self.lights.len(),
+            self.ghosts_traced
         );
     }
-    if !quiet && !report.lights.is_empty() && report.changed_pixels == Some(0) {
-        eprintln!(
-            "warning: the flare changes no pixel more than {AWAY_FROM_LIGHT_PX} px from the \
-             lights by one 8-bit step (gain {gain}): raise --gain or --exposure-ev to see it"
-        );
-    }
-    Ok(())
 }
 
 /// How far beyond a light's own radius a pixel must be to count as away from it (px): the

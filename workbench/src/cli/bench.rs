@@ -13,27 +13,22 @@ use std::time::Instant;
 use clap::Args;
 use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::ghost::ReflectionOrder;
-use flarebench_sdk::image::HdrImage;
-use ghost_raytrace::ghosts;
-use ghost_raytrace::plan::{self, LensTables, PlanOptions};
+use ghost_raytrace::ghosts::RenderOptions;
+use ghost_raytrace::plan::{LensTables, PlanOptions};
 use ghost_raytrace::reference::reference_image_of_order;
 use ghost_raytrace::scene::{LightSpec, Quality};
 use serde::Serialize;
 
 use anyhow::Context;
-use flarebench_sdk::LensSystem;
-use flarebench_sdk::frame::Frame;
 use ghost_raytrace::plan::LightPlan;
 
-use super::render::{frame_for, parse_downscale, parse_size};
+use super::render::{parse_downscale, parse_size};
 use crate::aperture_file::{MaskEncoding, load_aperture_mask};
-use crate::backend::{BackendChoice, BackendReport, GhostBackend};
-use crate::compose::StarburstSetup;
+use crate::flare::{BackendChoice, BackendReport, Flare, Preset, Scene, StarburstMode, frame_for};
 use crate::lens_library;
 use crate::precomputed::load_precomputed;
 use crate::stats::median;
 use crate::table::Table;
-use flarebench_sdk::starburst::{StarburstCache, StarburstSettings};
 
 #[derive(Debug, Args)]
 pub struct BenchArgs {
@@ -141,7 +136,7 @@ pub struct BenchRow {
     pub lens: String,
     pub quality: Quality,
     pub aperture: BenchAperture,
-    /// Where the ghosts were drawn, and on what (`crate::backend::BackendReport`: the GPU's
+    /// Where the ghosts were drawn, and on what (`crate::flare::BackendReport`: the GPU's
     /// adapter, meshing time, triangles and bytes uploaded, pass times of the last run).
     pub backend: BackendReport,
     /// GPU rows: medians over the runs of the CPU's tracing and meshing and of the GPU's
@@ -179,113 +174,126 @@ pub struct BenchRow {
 
 pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
     anyhow::ensure!(args.runs >= 1, "--runs must be at least 1");
-    let lights = std::slice::from_ref(&args.light);
     anyhow::ensure!(
         args.precomputed.is_none() || args.lenses.len() == 1,
         "--precomputed needs exactly one lens (a table is made for one lens)"
     );
     let mut rows = Vec::new();
     for name in &args.lenses {
-        let sys = lens_library::load(name, quiet || args.json)?.system;
-        let table = match &args.precomputed {
-            Some(p) => Some(load_precomputed(p, &sys, quiet || args.json)?),
-            None => None,
+        rows.extend(bench_lens(name, args, quiet)?);
+    }
+    print_rows(&rows, args)
+}
+
+/// Every aperture, backend and preset of lens `name`: a row each.
+fn bench_lens(name: &str, args: &BenchArgs, quiet: bool) -> anyhow::Result<Vec<BenchRow>> {
+    let lights = std::slice::from_ref(&args.light);
+    let mut rows = Vec::new();
+    let sys = lens_library::load(name, quiet || args.json)?.system;
+    let table = match &args.precomputed {
+        Some(p) => Some(load_precomputed(p, &sys, quiet || args.json)?),
+        None => None,
+    };
+    let frame = frame_for(&sys, args.size);
+    let error_frame = frame_for(&sys, args.error_size.unwrap_or(args.size));
+    // The lens's interface tables, built once per lens (as a plugin does when the lens
+    // is prepared), for every frame's plan.
+    let t = Instant::now();
+    let lens_tables = LensTables::new(&sys);
+    let prepare_ms = t.elapsed().as_secs_f64() * 1e3;
+    for &ap in &args.aperture {
+        let aperture = ap.aperture()?;
+        let reference = if args.error {
+            if !quiet && !args.json {
+                eprintln!(
+                    "{name}: rendering the reference at {}×{} ({ap}) …",
+                    error_frame.width, error_frame.height
+                );
+            }
+            Some(reference_image_of_order(
+                &sys,
+                &aperture,
+                error_frame,
+                lights,
+                args.reflections,
+            )?)
+        } else {
+            None
         };
-        let frame = frame_for(&sys, args.size);
-        let error_frame = frame_for(&sys, args.error_size.unwrap_or(args.size));
-        // The lens's interface tables, built once per lens (as a plugin does when the lens
-        // is prepared), for every frame's plan.
-        let t = Instant::now();
-        let lens_tables = LensTables::new(&sys);
-        let prepare_ms = t.elapsed().as_secs_f64() * 1e3;
-        for &ap in &args.aperture {
-            let aperture = ap.aperture()?;
-            let reference = if args.error {
-                if !quiet && !args.json {
-                    eprintln!(
-                        "{name}: rendering the reference at {}×{} ({ap}) …",
-                        error_frame.width, error_frame.height
-                    );
-                }
-                Some(reference_image_of_order(
-                    &sys,
-                    &aperture,
-                    error_frame,
-                    lights,
-                    args.reflections,
-                )?)
-            } else {
-                None
-            };
-            for &choice in &args.backend {
-                let mut backend = GhostBackend::open(choice)?;
-                for &q in &args.quality {
-                    let preset = PlanOptions::for_quality(q, table.as_ref());
-                    let opts = PlanOptions {
+        for &choice in &args.backend {
+            let mut flare = Flare::open(choice)?;
+            for &q in &args.quality {
+                let preset = PlanOptions::for_quality(q, table.as_ref());
+                let preset = Preset {
+                    render: RenderOptions {
+                        band_by_band: args.band_by_band,
+                        ..RenderOptions::default()
+                    },
+                    ..Preset::new(PlanOptions {
                         max_downscale: args.max_downscale.unwrap_or(preset.max_downscale),
                         reflections: args.reflections,
                         lens_tables: Some(&lens_tables),
                         ..preset
-                    };
-                    let case = Case {
-                        sys: &sys,
-                        aperture: &aperture,
-                        lights,
-                        starburst: args.starburst,
-                        opts: &opts,
-                        options: ghosts::RenderOptions {
-                            band_by_band: args.band_by_band,
-                            ..Default::default()
-                        },
-                    };
-                    let timed = case.time(&mut backend, frame, args.runs)?;
-                    let lp = &timed.plans[0];
-                    let (total, dropped) = lp.energy();
-                    let error = reference
-                        .as_ref()
-                        .map(|r| -> anyhow::Result<_> {
-                            let plans = plan::plan(&sys, lights, &error_frame, &opts)?;
-                            let (img, _) = backend.render(
-                                &sys,
-                                &aperture,
-                                error_frame,
-                                &plans,
-                                case.options,
-                            )?;
-                            Ok(img.compare(r)?)
-                        })
-                        .transpose()?;
-                    rows.push(BenchRow {
-                        lens: sys.name.clone(),
-                        quality: q,
-                        aperture: ap,
-                        backend: timed.report,
-                        mesh_ms: timed.mesh_ms,
-                        gpu_ms: timed.gpu_ms,
-                        starburst_ms: timed.starburst_ms,
-                        reflections: args.reflections,
-                        precomputed: table.is_some(),
-                        width: frame.width,
-                        height: frame.height,
-                        ghosts_drawn: lp.ghosts.len(),
-                        ghosts_total: lp.ghosts.len() + lp.dropped.len(),
-                        dropped_energy_fraction: if total > 0.0 { dropped / total } else { 0.0 },
-                        culled_energy_fraction: lp.culled_share,
-                        prepare_ms,
-                        plan_ms: timed.plan_ms,
-                        render_ms: timed.render_ms,
-                        frame_ms: timed.frame_ms,
-                        error_width: error.map(|_| error_frame.width),
-                        error_height: error.map(|_| error_frame.height),
-                        relative_rmse: error.map(|c| c.relative_rmse),
-                        energy_error: error.map(|c| c.energy_error),
-                    });
-                }
+                    })
+                };
+                let scene = Scene {
+                    starburst: if args.starburst {
+                        StarburstMode::On
+                    } else {
+                        StarburstMode::Off
+                    },
+                    ..Scene::new(&sys, lights, &aperture, frame)
+                };
+                let timed = time(&mut flare, &scene, &preset, args.runs)?;
+                let error = reference
+                    .as_ref()
+                    .map(|r| -> anyhow::Result<_> {
+                        let scene = Scene {
+                            frame: error_frame,
+                            starburst: StarburstMode::Off,
+                            ..scene
+                        };
+                        flare.render(&scene, &preset)?;
+                        Ok(flare.image().compare(r)?)
+                    })
+                    .transpose()?;
+                let lp = &timed.plans[0];
+                let (total, dropped) = lp.energy();
+                rows.push(BenchRow {
+                    lens: sys.name.clone(),
+                    quality: q,
+                    aperture: ap,
+                    backend: timed.report,
+                    mesh_ms: timed.mesh_ms,
+                    gpu_ms: timed.gpu_ms,
+                    starburst_ms: timed.starburst_ms,
+                    reflections: args.reflections,
+                    precomputed: table.is_some(),
+                    width: frame.width,
+                    height: frame.height,
+                    ghosts_drawn: lp.ghosts.len(),
+                    ghosts_total: lp.ghosts.len() + lp.dropped.len(),
+                    dropped_energy_fraction: if total > 0.0 { dropped / total } else { 0.0 },
+                    culled_energy_fraction: lp.culled_share,
+                    prepare_ms,
+                    plan_ms: timed.plan_ms,
+                    render_ms: timed.render_ms,
+                    frame_ms: timed.frame_ms,
+                    error_width: error.map(|_| error_frame.width),
+                    error_height: error.map(|_| error_frame.height),
+                    relative_rmse: error.map(|c| c.relative_rmse),
+                    energy_error: error.map(|c| c.energy_error),
+                });
             }
         }
     }
+    Ok(rows)
+}
+
+/// The rows as JSON, or as a table with the machine's adapters and the bench's settings.
+fn print_rows(rows: &[BenchRow], args: &BenchArgs) -> anyhow::Result<()> {
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&rows)?);
+        println!("{}", serde_json::to_string_pretty(rows)?);
         return Ok(());
     }
     let mut t = Table::new(&[
@@ -307,7 +315,7 @@ pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
         "rel RMSE",
         "energy",
     ]);
-    for r in &rows {
+    for r in rows {
         let pct = |v: Option<f64>| v.map_or("—".to_string(), |v| format!("{:.2}%", 100.0 * v));
         t.row(vec![
             r.lens.clone(),
@@ -363,17 +371,6 @@ pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// One lens, aperture and preset to time.
-struct Case<'a> {
-    sys: &'a LensSystem,
-    aperture: &'a Aperture,
-    lights: &'a [LightSpec],
-    /// Add and time the lights' starbursts.
-    starburst: bool,
-    opts: &'a PlanOptions<'a>,
-    options: ghosts::RenderOptions,
-}
-
 /// A case's medians over its runs, and the last run's plans and backend report.
 struct Timed {
     plan_ms: f64,
@@ -386,77 +383,43 @@ struct Timed {
     report: BackendReport,
 }
 
-impl Case<'_> {
-    /// Plans and renders `runs` frames. On the CPU into one frame buffer kept from run to run,
-    /// as a live preview draws into its window's buffer: its last frame replaced (no clearing
-    /// pass), the coarse frames kept too. On the GPU with the renderer's buffers and targets
-    /// kept, each frame read back.
-    fn time(&self, backend: &mut GhostBackend, frame: Frame, runs: usize) -> anyhow::Result<Timed> {
-        let (mut plan_ms, mut render_ms, mut frame_ms) = (vec![], vec![], vec![]);
-        let (mut mesh_ms, mut gpu_ms) = (vec![], vec![]);
-        let mut img = HdrImage::new(frame.width, frame.height);
-        let mut scratch = ghosts::RenderScratch::default();
-        let mut cache = StarburstCache::new();
-        let setup = StarburstSetup {
-            aperture: self.aperture,
-            dust: None,
-            settings: StarburstSettings::default(),
-        };
-        let mut starburst_ms = vec![];
-        let mut last = None;
-        for _ in 0..runs {
-            let t0 = Instant::now();
-            let plans = plan::plan(self.sys, self.lights, &frame, self.opts)?;
-            let t1 = Instant::now();
-            if backend.is_gpu() {
-                img = backend
-                    .render(self.sys, self.aperture, frame, &plans, self.options)?
-                    .0;
-                let r = backend.report();
-                mesh_ms.extend(r.mesh_ms);
-                gpu_ms.extend(r.gpu_ms);
-            } else {
-                ghosts::render_into_reusing(
-                    self.sys,
-                    self.aperture,
-                    frame,
-                    &plans,
-                    ghosts::RenderOptions {
-                        replace: true,
-                        ..self.options
-                    },
-                    &mut scratch,
-                    &mut img.pixels,
-                )?;
-            }
-            if self.starburst {
-                let t = Instant::now();
-                backend.add_starbursts(
-                    &mut img,
-                    self.sys,
-                    &frame,
-                    self.lights,
-                    &setup,
-                    &mut cache,
-                )?;
-                starburst_ms.push(t.elapsed().as_secs_f64() * 1e3);
-            }
-            let t2 = Instant::now();
-            anyhow::ensure!(!img.has_non_finite(), "non-finite pixels");
-            plan_ms.push((t1 - t0).as_secs_f64() * 1e3);
-            render_ms.push((t2 - t1).as_secs_f64() * 1e3);
-            frame_ms.push((t2 - t0).as_secs_f64() * 1e3);
-            last = Some(plans);
+/// Plans and renders `runs` frames of `scene` with `flare`, which keeps its buffers from run
+/// to run as a live preview does: on the CPU one frame buffer, its last frame replaced (no
+/// clearing pass), the coarse frames kept too; on the GPU the renderer's buffers and targets,
+/// each frame read back; the starburst patterns in their cache.
+fn time(
+    flare: &mut Flare,
+    scene: &Scene<'_>,
+    preset: &Preset<'_>,
+    runs: usize,
+) -> anyhow::Result<Timed> {
+    let (mut plan_ms, mut render_ms, mut frame_ms) = (vec![], vec![], vec![]);
+    let (mut mesh_ms, mut gpu_ms, mut starburst_ms) = (vec![], vec![], vec![]);
+    let mut last = None;
+    for _ in 0..runs {
+        let r = flare.render(scene, preset)?;
+        let t = r.timings;
+        if flare.backend().is_gpu() {
+            let report = flare.backend().report();
+            mesh_ms.extend(report.mesh_ms);
+            gpu_ms.extend(report.gpu_ms);
         }
-        Ok(Timed {
-            plan_ms: median(&plan_ms),
-            render_ms: median(&render_ms),
-            frame_ms: median(&frame_ms),
-            mesh_ms: (!mesh_ms.is_empty()).then(|| median(&mesh_ms)),
-            gpu_ms: (!gpu_ms.is_empty()).then(|| median(&gpu_ms)),
-            starburst_ms: (!starburst_ms.is_empty()).then(|| median(&starburst_ms)),
-            plans: last.expect("at least one run"),
-            report: backend.report().clone(),
-        })
+        if scene.starburst.starbursts() {
+            starburst_ms.push(t.starburst_ms);
+        }
+        plan_ms.push(t.plan_ms);
+        render_ms.push(t.ghosts_ms + t.starburst_ms);
+        frame_ms.push(t.total_ms());
+        last = Some(r.plans);
     }
+    Ok(Timed {
+        plan_ms: median(&plan_ms),
+        render_ms: median(&render_ms),
+        frame_ms: median(&frame_ms),
+        mesh_ms: (!mesh_ms.is_empty()).then(|| median(&mesh_ms)),
+        gpu_ms: (!gpu_ms.is_empty()).then(|| median(&gpu_ms)),
+        starburst_ms: (!starburst_ms.is_empty()).then(|| median(&starburst_ms)),
+        plans: last.expect("at least one run"),
+        report: flare.backend().report().clone(),
+    })
 }

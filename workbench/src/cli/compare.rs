@@ -16,10 +16,11 @@ use flarebench_sdk::image::HdrImage;
 use ghost_raytrace::scene::LightSpec;
 use serde::Serialize;
 
-use super::render::{IrisArgs, auto_exposure, parse_size};
+use super::render::{IrisArgs, parse_size};
 pub(crate) use crate::algo_spec::Algo;
-use crate::backend::{BackendChoice, BackendReport, GhostBackend};
 use crate::file_watch::WatchedFile;
+use crate::flare::exposure::auto_exposure;
+use crate::flare::{BackendChoice, BackendReport, GhostBackend};
 use crate::label;
 use crate::lens_library;
 use crate::output::{ToneMap, ToneOperator, save_image};

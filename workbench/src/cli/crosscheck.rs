@@ -12,7 +12,8 @@ use flarebench_sdk::ghost::monte_carlo::McSettings;
 use ghost_raytrace::crosscheck::{Allot, Crosscheck, CrosscheckOptions, GhostRow, crosscheck};
 use ghost_raytrace::scene::{LightSpec, Quality};
 
-use super::render::{frame_for, parse_size};
+use super::render::parse_size;
+use crate::flare::frame_for;
 use crate::lens_library;
 use crate::output::{ToneMap, save_image};
 use crate::table::Table;

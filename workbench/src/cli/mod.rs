@@ -10,7 +10,7 @@ mod edit;
 mod info;
 mod plugins;
 mod precompute;
-pub(crate) mod render;
+mod render;
 mod stability;
 mod sweep;
 mod trace;

@@ -8,15 +8,16 @@ use anyhow::Context;
 use clap::Args;
 use flarebench_sdk::aperture::{Aperture, ApertureMask};
 use flarebench_sdk::frame::Frame;
-use flarebench_sdk::starburst::{StarburstCache, StarburstSettings};
-
+use flarebench_sdk::ghost::table::BoundsTable;
+use flarebench_sdk::image::HdrImage;
+use flarebench_sdk::starburst::StarburstSettings;
+use ghost_raytrace::ghosts::RenderOptions;
 use ghost_raytrace::plan::PlanOptions;
 use ghost_raytrace::scene::{LightSpec, Quality};
-use ghost_raytrace::{ghosts, plan};
 
 use crate::aperture_file::{MaskEncoding, load_aperture_mask};
-use crate::backend::{BackendChoice, GhostBackend};
-use crate::compose::{StarburstSetup, add_onto};
+use crate::flare::compose::add_onto;
+use crate::flare::{BackendChoice, Flare, Preset, Scene, StarburstMode, frame_for};
 use crate::input_image::read_input_image;
 use crate::lens_library;
 use crate::output::{
@@ -24,7 +25,7 @@ use crate::output::{
 };
 use crate::precomputed::load_precomputed;
 use crate::reference_file::{ReferenceSource, reference_for};
-use crate::report::{ErrorReport, LightReport, RenderReport, Timings};
+use crate::report::{ErrorReport, RenderReport, Timings};
 use flarebench_sdk::ghost::ReflectionOrder;
 
 #[derive(Debug, Args)]
@@ -115,17 +116,6 @@ pub struct RenderArgs {
     /// Print the report as one JSON object.
     #[arg(long)]
     pub json: bool,
-}
-
-/// What the flare is made of.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum StarburstMode {
-    /// Ghosts and starbursts.
-    On,
-    /// Ghosts only.
-    Off,
-    /// Starbursts only.
-    Only,
 }
 
 /// Starburst options shared by `render` and `apply`.
@@ -260,18 +250,7 @@ fn scene_lights(
     Ok(lights)
 }
 
-/// The output frame: `size` pixels spanning the film's width, the height following the
-/// aspect ratio.
-pub(crate) fn frame_for(sys: &flarebench_sdk::LensSystem, (w, h): (usize, usize)) -> Frame {
-    Frame {
-        width: w,
-        height: h,
-        film_width_mm: sys.film_width_mm,
-        film_height_mm: sys.film_width_mm * h as f64 / w as f64,
-    }
-}
-
-pub(crate) fn parse_size(s: &str) -> Result<(usize, usize), String> {
+pub(super) fn parse_size(s: &str) -> Result<(usize, usize), String> {
     let (w, h) = s
         .split_once(['x', 'X'])
         .ok_or_else(|| format!("size `{s}` is not WxH"))?;
@@ -291,7 +270,7 @@ pub(crate) fn parse_size(s: &str) -> Result<(usize, usize), String> {
     Ok((w, h))
 }
 
-pub(crate) fn parse_downscale(s: &str) -> Result<usize, String> {
+pub(super) fn parse_downscale(s: &str) -> Result<usize, String> {
     match s.trim().parse::<usize>() {
         Ok(f) if f.is_power_of_two() && f <= 64 => Ok(f),
         _ => Err(format!("`{s}` is not a power of two from 1 to 64")),
@@ -306,12 +285,118 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
     let t_load = Instant::now();
     let loaded = lens_library::load(&args.lens, quiet || args.json)?;
     let sys = &loaded.system;
-    let mut timings = Timings::default();
     let background = match &args.background {
         Some(p) => Some(read_input_image(p)?.image),
         None => None,
     };
-    let (w, h) = match (&background, args.size) {
+    let frame = frame_for(sys, output_size(background.as_ref(), args.size)?);
+    let (starburst_settings, dust) = args.starburst.load()?;
+    let aperture = args.iris.aperture()?;
+    let table = match &args.precomputed {
+        Some(p) => Some(load_precomputed(p, sys, quiet || args.json)?),
+        None => None,
+    };
+    let mut timings = Timings {
+        load_ms: ms(t_load),
+        ..Timings::default()
+    };
+    let lights = scene_lights(sys, &frame, args)?;
+    let scene = Scene {
+        starburst: args.starburst.starburst,
+        starburst_settings,
+        dust: dust.as_ref(),
+        ..Scene::new(sys, &lights, &aperture, frame)
+    };
+    let reference = args.reference || args.reference_file.is_some();
+    let preset = Preset {
+        render: RenderOptions {
+            trace_f64: args.f64,
+            band_by_band: args.band_by_band,
+            ..RenderOptions::default()
+        },
+        exposure: background.is_none() && args.exposure_ev.is_none(),
+        keep_ghosts: reference && scene.starburst.starbursts(),
+        ..Preset::new(args.plan_options(table.as_ref()))
+    };
+
+    let t = Instant::now();
+    let mut flare = Flare::open(args.backend)?;
+    let open_ms = ms(t);
+    let mut frame_out = flare.render(&scene, &preset)?;
+    timings.plan_ms = frame_out.timings.plan_ms;
+    timings.render_ms = open_ms + frame_out.timings.ghosts_ms;
+    timings.starburst_ms = frame_out.timings.starburst_ms;
+
+    // The reference holds the ghosts alone.
+    let error = if reference {
+        let ghosts = frame_out.ghosts_image.take();
+        let ghosts = ghosts.as_ref().unwrap_or(flare.image());
+        Some(reference_error(&scene, args, ghosts, quiet, &mut timings)?)
+    } else {
+        None
+    };
+
+    let t = Instant::now();
+    let tone = ToneMap {
+        exposure_ev: match &background {
+            Some(_) => args.exposure_ev.unwrap_or(0.0),
+            None => args.exposure_ev.or(frame_out.exposure_ev).unwrap_or(0.0),
+        },
+        operator: args.tone.unwrap_or(match &background {
+            Some(_) => ToneOperator::Clamp,
+            None => ToneOperator::Aces,
+        }),
+    };
+    let flare_sum = flare.image().sum();
+    let flare_max = flare.image().max();
+    write_output(&mut flare, background.as_ref(), &tone, args)?;
+    timings.write_ms = ms(t);
+
+    let report = RenderReport {
+        lens: sys.name.clone(),
+        width: frame.width,
+        height: frame.height,
+        quality: args.quality,
+        output: args.output.display().to_string(),
+        timings,
+        rays_traced: frame_out.rays_traced(),
+        triangles: frame_out.triangles(),
+        image_sum_rgb: flare_sum,
+        image_max: flare_max,
+        exposure_ev: tone.exposure_ev,
+        lights: frame_out.light_reports(),
+        starbursts: frame_out.starbursts,
+        error,
+        backend: flare.backend().report().clone(),
+    };
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else if args.report {
+        print!("{}", report.text());
+    } else if !quiet {
+        eprintln!("wrote {}", args.output.display());
+    }
+    Ok(())
+}
+
+impl RenderArgs {
+    /// The planner's options: the preset's, with `--max-downscale` and `--reflections`.
+    fn plan_options<'a>(&self, table: Option<&'a BoundsTable>) -> PlanOptions<'a> {
+        let preset = PlanOptions::for_quality(self.quality, table);
+        PlanOptions {
+            max_downscale: self.max_downscale.unwrap_or(preset.max_downscale),
+            reflections: self.reflections,
+            ..preset
+        }
+    }
+}
+
+/// The output's size: `--size`, else the background's (they must agree), else 1920×1080.
+fn output_size(
+    background: Option<&HdrImage>,
+    size: Option<(usize, usize)>,
+) -> anyhow::Result<(usize, usize)> {
+    Ok(match (background, size) {
         (Some(bg), Some(size)) => {
             anyhow::ensure!(
                 size == (bg.width, bg.height),
@@ -325,191 +410,58 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
         }
         (Some(bg), None) => (bg.width, bg.height),
         (None, size) => size.unwrap_or((1920, 1080)),
-    };
-    let (starburst_settings, dust) = args.starburst.load()?;
-    let frame = frame_for(sys, (w, h));
-    let aperture = args.iris.aperture()?;
+    })
+}
 
-    let table = match &args.precomputed {
-        Some(p) => Some(load_precomputed(p, sys, quiet || args.json)?),
-        None => None,
-    };
-    timings.load_ms = ms(t_load);
-
-    let lights = scene_lights(sys, &frame, args)?;
+/// The error of the ghosts' image against the dense reference (read from or written to
+/// `--reference-file`).
+fn reference_error(
+    scene: &Scene<'_>,
+    args: &RenderArgs,
+    ghosts: &HdrImage,
+    quiet: bool,
+    timings: &mut Timings,
+) -> anyhow::Result<ErrorReport> {
     let t = Instant::now();
-    let q = args.quality;
-    let preset = PlanOptions::for_quality(q, table.as_ref());
-    let opts = PlanOptions {
-        max_downscale: args.max_downscale.unwrap_or(preset.max_downscale),
-        reflections: args.reflections,
-        ..preset
-    };
-    let mode = args.starburst.starburst;
-    let plans = if mode == StarburstMode::Only {
-        Vec::new()
-    } else {
-        plan::plan(sys, &lights, &frame, &opts)?
-    };
-    timings.plan_ms = ms(t);
-
-    let t = Instant::now();
-    let mut backend = GhostBackend::open(args.backend)?;
-    let (mut img, stats) = backend.render(
-        sys,
-        &aperture,
-        frame,
-        &plans,
-        ghosts::RenderOptions {
-            trace_f64: args.f64,
-            band_by_band: args.band_by_band,
-            ..Default::default()
-        },
+    let (reference, source) = reference_for(
+        scene.system,
+        scene.aperture,
+        scene.frame,
+        scene.lights,
+        args.reference_file.as_deref(),
+        args.reflections,
     )?;
-    timings.render_ms = ms(t);
-    anyhow::ensure!(
-        !img.has_non_finite(),
-        "internal error: the image has non-finite pixels"
-    );
+    timings.reference_ms = Some(ms(t));
+    if !quiet && !args.json && source != ReferenceSource::Rendered {
+        eprintln!("reference {source}");
+    }
+    ErrorReport::between(ghosts, &reference)
+}
 
-    let error = if args.reference || args.reference_file.is_some() {
-        let t = Instant::now();
-        let (reference, source) = reference_for(
-            sys,
-            &aperture,
-            frame,
-            &lights,
-            args.reference_file.as_deref(),
-            args.reflections,
-        )?;
-        timings.reference_ms = Some(ms(t));
-        if !quiet && !args.json && source != ReferenceSource::Rendered {
-            eprintln!("reference {source}");
-        }
-        let c = img.compare(&reference)?;
-        Some(ErrorReport {
-            relative_rmse: c.relative_rmse,
-            relative_l1: c.relative_l1,
-            energy_error: c.energy_error,
-        })
-    } else {
-        None
-    };
-
-    // The automatic exposure is the ghosts' (when some are drawn), taken before the starbursts
-    // are added: a light in the frame is far brighter than its ghosts, and a photograph that
-    // shows the flare lets the light itself clip.
-    let ghost_exposure = (background.is_none() && args.exposure_ev.is_none())
-        .then(|| lit_exposure(&img).map(|ev| ev + GHOST_HEADROOM_EV))
-        .flatten();
-    // Starbursts after the reference comparison, which is of the ghosts alone.
-    let t = Instant::now();
-    let starbursts = if mode == StarburstMode::Off {
-        Vec::new()
-    } else {
-        let setup = StarburstSetup {
-            aperture: &aperture,
-            dust: dust.as_ref(),
-            settings: starburst_settings,
-        };
-        let mut cache = StarburstCache::new();
-        backend.add_starbursts(&mut img, sys, &frame, &lights, &setup, &mut cache)?
-    };
-    timings.starburst_ms = ms(t);
-
-    let t = Instant::now();
-    let (exposure_ev, operator) = match &background {
-        Some(_) => (
-            args.exposure_ev.unwrap_or(0.0),
-            args.tone.unwrap_or(ToneOperator::Clamp),
-        ),
-        None => (
-            args.exposure_ev
-                .or(ghost_exposure)
-                .unwrap_or_else(|| auto_exposure(&img)),
-            args.tone.unwrap_or(ToneOperator::Aces),
-        ),
-    };
-    let tone = ToneMap {
-        exposure_ev,
-        operator,
-    };
+/// Writes the frame to `--output`: onto the background when there is one; a PNG of the flare
+/// alone tone mapped by the backend's own pass when it has one (the GPU's).
+fn write_output(
+    flare: &mut Flare,
+    background: Option<&HdrImage>,
+    tone: &ToneMap,
+    args: &RenderArgs,
+) -> anyhow::Result<()> {
     let precision = if args.exr_half {
         ExrPrecision::Half
     } else {
         ExrPrecision::Float
     };
-    let flare_sum = img.sum();
-    let flare_max = img.max();
-    // With the GPU backend a PNG of the flare alone is tone mapped there, in a last pass.
     let gpu_png =
         if background.is_none() && OutputFormat::from_path(&args.output)? == OutputFormat::Png {
-            backend.tone_map(&tone)?
+            flare.backend_mut().tone_map(tone)?
         } else {
             None
         };
-    match (gpu_png, &background) {
-        (Some(rgb), _) => save_png_rgb8(rgb, w, h, &args.output)?,
-        (None, Some(bg)) => save_image_as(&add_onto(bg, &img)?, &args.output, &tone, precision)?,
-        (None, None) => save_image_as(&img, &args.output, &tone, precision)?,
-    }
-    timings.write_ms = ms(t);
-
-    let lights: Vec<LightReport> = plans
-        .iter()
-        .zip(&stats)
-        .map(|(lp, s)| LightReport::new(lp, s))
-        .collect();
-    let report = RenderReport {
-        lens: sys.name.clone(),
-        width: w,
-        height: h,
-        quality: q,
-        output: args.output.display().to_string(),
-        timings,
-        rays_traced: stats.iter().flatten().map(|s| s.rays).sum(),
-        triangles: stats.iter().flatten().map(|s| s.triangles).sum(),
-        image_sum_rgb: flare_sum,
-        image_max: flare_max,
-        exposure_ev,
-        lights,
-        starbursts,
-        error,
-        backend: backend.report().clone(),
-    };
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
-    } else if args.report {
-        print!("{}", report.text());
-    } else if !quiet {
-        eprintln!("wrote {}", args.output.display());
+    let img = flare.image();
+    match (gpu_png, background) {
+        (Some(rgb), _) => save_png_rgb8(rgb, img.width, img.height, &args.output)?,
+        (None, Some(bg)) => save_image_as(&add_onto(bg, img)?, &args.output, tone, precision)?,
+        (None, None) => save_image_as(img, &args.output, tone, precision)?,
     }
     Ok(())
-}
-
-/// Exposure (stops) that maps the 99.9th percentile of the lit pixels' luminance to 1;
-/// 0 for an empty image.
-pub(crate) fn auto_exposure(img: &flarebench_sdk::image::HdrImage) -> f32 {
-    lit_exposure(img).unwrap_or(0.0)
-}
-
-/// Stops the automatic exposure leaves above the brightest 0.1% of the ghosts' pixels: they
-/// land at a quarter of white, so ghosts that overlap stay translucent and keep their colour
-/// through the tone curve (at 0 the Heliar's ghosts for a light at 8°, 60° wash the frame out).
-pub(crate) const GHOST_HEADROOM_EV: f32 = -2.0;
-
-/// [`auto_exposure`], or `None` when no pixel is lit.
-pub(crate) fn lit_exposure(img: &flarebench_sdk::image::HdrImage) -> Option<f32> {
-    let mut lum: Vec<f32> = img
-        .pixels
-        .iter()
-        .map(|p| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2])
-        .filter(|&l| l > 0.0)
-        .collect();
-    if lum.is_empty() {
-        return None;
-    }
-    let k = ((lum.len() as f64 * 0.999) as usize).min(lum.len() - 1);
-    let (_, &mut p, _) = lum.select_nth_unstable_by(k, f32::total_cmp);
-    Some(-p.log2())
 }

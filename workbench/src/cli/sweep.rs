@@ -10,21 +10,25 @@ use anyhow::Context;
 use clap::Args;
 use flarebench_sdk::abi::params::{ParamInfo, parse_values};
 use flarebench_sdk::ghost::ReflectionOrder;
+use flarebench_sdk::image::HdrImage;
 use ghost_raytrace::plan::LensTables;
 use ghost_raytrace::reference::reference_key;
 use ghost_raytrace::scene::{LightSpec, Quality};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 
-use super::render::{IrisArgs, auto_exposure, frame_for, parse_size};
-use crate::backend::{BackendChoice, GhostBackend};
+use super::render::{IrisArgs, parse_size};
+use crate::flare::exposure::auto_exposure;
+use crate::flare::{BackendChoice, Flare, frame_for};
 use crate::lens_library;
 use crate::output::{ToneMap, ToneOperator, save_image};
 use crate::sweep::measure::{self, CaseScene, params_of};
 use crate::sweep::points::{self, Point, Vary, split_algo};
 use crate::sweep::sheet::{THUMB_WIDTH, Tile, contact_sheet, thumbnail};
 use crate::sweep::store::Store;
-use crate::sweep::{CaseInfo, CaseResult, aperture_text, plot, report};
+use crate::sweep::{
+    CaseInfo, CaseResult, CellResult, ReferenceRecord, aperture_text, plot, report,
+};
 use crate::table::Table;
 
 #[derive(Debug, Args)]
@@ -115,22 +119,16 @@ fn civil_date(days: i64) -> String {
 pub fn run(args: &SweepArgs, quiet: bool) -> anyhow::Result<()> {
     let started = Instant::now();
     let command = std::env::args().collect::<Vec<_>>().join(" ");
-    // Parameters of each algorithm, asked once (a plugin is loaded to tell them).
-    let mut known: HashMap<String, Vec<ParamInfo>> = HashMap::new();
-    let mut params = |name: &str| -> anyhow::Result<Vec<ParamInfo>> {
-        if let Some(p) = known.get(name) {
-            return Ok(p.clone());
-        }
-        let p = params_of(name, &args.plugins)?;
-        known.insert(name.to_string(), p.clone());
-        Ok(p)
+    let mut params = Params {
+        plugins: &args.plugins,
+        known: HashMap::new(),
     };
     let pts = points::build(
         args.quality.as_deref(),
         &args.algos,
         &args.vary,
         args.product,
-        &mut params,
+        |name: &str| params.of(name),
     )?;
     let lights = if args.lights.is_empty() {
         vec![LightSpec::parse("10,30").map_err(anyhow::Error::msg)?]
@@ -146,43 +144,17 @@ pub fn run(args: &SweepArgs, quiet: bool) -> anyhow::Result<()> {
             }
         }
     }
-    let store = Store::open(&args.output)?;
-    let mut backend = GhostBackend::open(args.backend)?;
-    let backend_name = match &backend.report().adapter {
-        Some(a) => format!("gpu ({a})"),
-        None => backend.report().backend.clone(),
-    };
-    let runs = args.runs as usize;
     let show = !quiet && !args.json;
-
-    let total = (args.lenses.len() * lights.len() * pts.len()) as u64;
-    let bar = if show {
-        ProgressBar::new(total).with_style(
-            ProgressStyle::with_template(
-                "{msg:40} [{bar:30}] {pos}/{len} cells, {elapsed} (eta {eta})",
-            )
-            .expect("valid template")
-            .progress_chars("=> "),
-        )
-    } else {
-        ProgressBar::hidden()
-    };
-    let (mut run_count, mut reused, mut references) = (0usize, 0usize, 0usize);
+    let mut sweep = Sweep::open(args, params, show)?;
+    sweep
+        .bar
+        .set_length((args.lenses.len() * lights.len() * pts.len()) as u64);
     let mut cases = Vec::new();
     for lens_arg in &args.lenses {
         let sys = lens_library::load(lens_arg, !show)?.system;
         let tables = LensTables::new(&sys);
         let frame = frame_for(&sys, args.size);
         for light in &lights {
-            let case = CaseInfo {
-                lens: sys.name.clone(),
-                lens_arg: lens_arg.clone(),
-                theta_deg: light.theta_deg,
-                phi_deg: light.phi_deg,
-                width: frame.width,
-                height: frame.height,
-                aperture: aperture_text(&aperture),
-            };
             let scene = CaseScene {
                 system: &sys,
                 tables: &tables,
@@ -190,105 +162,13 @@ pub fn run(args: &SweepArgs, quiet: bool) -> anyhow::Result<()> {
                 frame,
                 light,
             };
-            let ref_key = reference_key(
-                &sys,
-                &aperture,
-                &frame,
-                std::slice::from_ref(light),
-                ReflectionOrder::Two,
-            );
-            let (reference, ref_img) = match store.load_reference(&ref_key) {
-                Some(r) => r,
-                None => {
-                    bar.set_message(format!("{}: reference", case.lens));
-                    let (mut rec, img) = measure::reference(&scene)?;
-                    rec.key = ref_key.clone();
-                    store.save_reference(&rec, &img, &thumbnail(&img, THUMB_WIDTH))?;
-                    references += 1;
-                    (rec, img)
-                }
-            };
-            let mut cells = Vec::new();
-            let mut thumbs = Vec::new();
-            for p in &pts {
-                bar.set_message(format!("{}: {}", case.lens, p.label));
-                let key = cell_key(&ref_key, p, &mut params, &backend_name, runs)?;
-                let cell = match store.load_cell(&key) {
-                    Some(c) => {
-                        reused += 1;
-                        c
-                    }
-                    None => {
-                        run_count += 1;
-                        let measured =
-                            measure::measure(&scene, p, runs, &mut backend, &args.plugins)
-                                .and_then(|m| {
-                                    let c = measure::finish(
-                                        key.clone(),
-                                        p,
-                                        &backend_name,
-                                        &m,
-                                        &reference,
-                                        &ref_img,
-                                    )?;
-                                    store.save_cell(&c, Some(&thumbnail(&m.image, THUMB_WIDTH)))?;
-                                    Ok(c)
-                                });
-                        match measured {
-                            Ok(c) => c,
-                            Err(e) => {
-                                bar.suspend(|| {
-                                    if show {
-                                        eprintln!("{}: {}: {e:#}", case.lens, p.algo)
-                                    }
-                                });
-                                measure::failed(key.clone(), p, &backend_name, format!("{e:#}"))
-                            }
-                        }
-                    }
-                };
-                thumbs.push((cell.failure.is_none()).then(|| Store::cell_thumbnail(&key)));
-                cells.push(cell);
-                bar.inc(1);
-            }
-            let result = CaseResult {
-                exposure_ev: auto_exposure(&ref_img),
-                reference_thumbnail: Some(Store::reference_thumbnail(&ref_key)),
-                case,
-                reference,
-                cells,
-                thumbnails: thumbs,
-            };
-            write_case_files(&store, &result)?;
-            cases.push(result);
+            cases.push(sweep.case(lens_arg, &scene, &pts)?);
         }
     }
-    bar.finish_and_clear();
+    sweep.bar.finish_and_clear();
 
     let took_s = started.elapsed().as_secs_f64();
-    let date = today();
-    let out = &args.output;
-    let write = |name: &str, bytes: &[u8]| -> anyhow::Result<()> {
-        let p = out.join(name);
-        flarebench_sdk::io::write_atomically(&p, bytes)
-            .with_context(|| format!("writing {}", p.display()))
-    };
-    write("results.csv", report::results_csv(&cases).as_bytes())?;
-    write("per_ghost.csv", report::per_ghost_csv(&cases).as_bytes())?;
-    let json = serde_json::to_string_pretty(&SweepReport {
-        command: &command,
-        date: &date,
-        took_s,
-        cells_run: run_count,
-        cells_reused: reused,
-        references_rendered: references,
-        cases: &cases,
-    })?;
-    write("results.json", json.as_bytes())?;
-    write(
-        "index.html",
-        report::index_html(&cases, &command, took_s, &date).as_bytes(),
-    )?;
+    let json = sweep.write_results(&cases, &command, took_s)?;
     let failed = cases
         .iter()
         .flat_map(|c| &c.cells)
@@ -298,19 +178,237 @@ pub fn run(args: &SweepArgs, quiet: bool) -> anyhow::Result<()> {
     let outcome = if failed > 0 {
         Err(anyhow::anyhow!(
             "{failed} of {all} cells failed (their reasons are in the results); the rest were written to {}",
-            out.display()
+            args.output.display()
         ))
     } else {
         Ok(())
     };
     if args.json {
         println!("{json}");
-        return outcome;
+    } else if !quiet {
+        print_cases(&cases);
+        println!(
+            "{} cells run, {} reused, {} references rendered; {:.1} s; backend {}; medians of {} runs; written to {}",
+            sweep.cells_run,
+            sweep.cells_reused,
+            sweep.references,
+            took_s,
+            sweep.backend_name,
+            sweep.runs,
+            args.output.join("index.html").display()
+        );
     }
-    if quiet {
-        return outcome;
+    outcome
+}
+
+/// Each algorithm's parameters, asked once (a plugin is loaded to tell them).
+struct Params<'a> {
+    plugins: &'a [PathBuf],
+    known: HashMap<String, Vec<ParamInfo>>,
+}
+
+impl Params<'_> {
+    fn of(&mut self, name: &str) -> anyhow::Result<Vec<ParamInfo>> {
+        if let Some(p) = self.known.get(name) {
+            return Ok(p.clone());
+        }
+        let p = params_of(name, self.plugins)?;
+        self.known.insert(name.to_string(), p.clone());
+        Ok(p)
     }
-    for case in &cases {
+}
+
+/// A sweep under way: where its results are kept, what draws its cells, its progress.
+struct Sweep<'a> {
+    args: &'a SweepArgs,
+    params: Params<'a>,
+    store: Store,
+    flare: Flare,
+    backend_name: String,
+    runs: usize,
+    show: bool,
+    bar: ProgressBar,
+    cells_run: usize,
+    cells_reused: usize,
+    references: usize,
+}
+
+impl<'a> Sweep<'a> {
+    fn open(args: &'a SweepArgs, params: Params<'a>, show: bool) -> anyhow::Result<Sweep<'a>> {
+        let store = Store::open(&args.output)?;
+        let flare = Flare::open(args.backend)?;
+        let backend_name = match &flare.backend().report().adapter {
+            Some(a) => format!("gpu ({a})"),
+            None => flare.backend().report().backend.clone(),
+        };
+        let bar = if show {
+            ProgressBar::new(0).with_style(
+                ProgressStyle::with_template(
+                    "{msg:40} [{bar:30}] {pos}/{len} cells, {elapsed} (eta {eta})",
+                )
+                .expect("valid template")
+                .progress_chars("=> "),
+            )
+        } else {
+            ProgressBar::hidden()
+        };
+        Ok(Sweep {
+            args,
+            params,
+            store,
+            flare,
+            backend_name,
+            runs: args.runs as usize,
+            show,
+            bar,
+            cells_run: 0,
+            cells_reused: 0,
+            references: 0,
+        })
+    }
+
+    /// One lens and light: its reference (kept or rendered), every point's cell (kept or
+    /// measured), its plot and contact sheet.
+    fn case(
+        &mut self,
+        lens_arg: &str,
+        scene: &CaseScene<'_>,
+        pts: &[Point],
+    ) -> anyhow::Result<CaseResult> {
+        let case = CaseInfo {
+            lens: scene.system.name.clone(),
+            lens_arg: lens_arg.to_string(),
+            theta_deg: scene.light.theta_deg,
+            phi_deg: scene.light.phi_deg,
+            width: scene.frame.width,
+            height: scene.frame.height,
+            aperture: aperture_text(scene.aperture),
+        };
+        let ref_key = reference_key(
+            scene.system,
+            scene.aperture,
+            &scene.frame,
+            std::slice::from_ref(scene.light),
+            ReflectionOrder::Two,
+        );
+        let (reference, ref_img) = match self.store.load_reference(&ref_key) {
+            Some(r) => r,
+            None => {
+                self.bar.set_message(format!("{}: reference", case.lens));
+                let (mut rec, img) = measure::reference(scene)?;
+                rec.key = ref_key.clone();
+                self.store
+                    .save_reference(&rec, &img, &thumbnail(&img, THUMB_WIDTH))?;
+                self.references += 1;
+                (rec, img)
+            }
+        };
+        let mut cells = Vec::new();
+        let mut thumbs = Vec::new();
+        for p in pts {
+            self.bar.set_message(format!("{}: {}", case.lens, p.label));
+            let key = cell_key(
+                &ref_key,
+                p,
+                &mut |n: &str| self.params.of(n),
+                &self.backend_name,
+                self.runs,
+            )?;
+            let cell = match self.store.load_cell(&key) {
+                Some(c) => {
+                    self.cells_reused += 1;
+                    c
+                }
+                None => {
+                    self.cells_run += 1;
+                    self.cell(&case, scene, p, key.clone(), &reference, &ref_img)
+                }
+            };
+            thumbs.push((cell.failure.is_none()).then(|| Store::cell_thumbnail(&key)));
+            cells.push(cell);
+            self.bar.inc(1);
+        }
+        let result = CaseResult {
+            exposure_ev: auto_exposure(&ref_img),
+            reference_thumbnail: Some(Store::reference_thumbnail(&ref_key)),
+            case,
+            reference,
+            cells,
+            thumbnails: thumbs,
+        };
+        write_case_files(&self.store, &result)?;
+        Ok(result)
+    }
+
+    /// Point `p` measured on the case's scene against its reference and kept, or the reason it
+    /// failed.
+    fn cell(
+        &mut self,
+        case: &CaseInfo,
+        scene: &CaseScene<'_>,
+        p: &Point,
+        key: String,
+        reference: &ReferenceRecord,
+        ref_img: &HdrImage,
+    ) -> CellResult {
+        let measured = measure::measure(scene, p, self.runs, &mut self.flare, &self.args.plugins)
+            .and_then(|m| {
+                let c =
+                    measure::finish(key.clone(), p, &self.backend_name, &m, reference, ref_img)?;
+                self.store
+                    .save_cell(&c, Some(&thumbnail(&m.image, THUMB_WIDTH)))?;
+                Ok(c)
+            });
+        match measured {
+            Ok(c) => c,
+            Err(e) => {
+                self.bar.suspend(|| {
+                    if self.show {
+                        eprintln!("{}: {}: {e:#}", case.lens, p.algo)
+                    }
+                });
+                measure::failed(key, p, &self.backend_name, format!("{e:#}"))
+            }
+        }
+    }
+
+    /// `results.csv`, `per_ghost.csv`, `results.json` and `index.html`; the JSON's text.
+    fn write_results(
+        &self,
+        cases: &[CaseResult],
+        command: &str,
+        took_s: f64,
+    ) -> anyhow::Result<String> {
+        let date = today();
+        let out = &self.args.output;
+        let write = |name: &str, bytes: &[u8]| -> anyhow::Result<()> {
+            let p = out.join(name);
+            flarebench_sdk::io::write_atomically(&p, bytes)
+                .with_context(|| format!("writing {}", p.display()))
+        };
+        write("results.csv", report::results_csv(cases).as_bytes())?;
+        write("per_ghost.csv", report::per_ghost_csv(cases).as_bytes())?;
+        let json = serde_json::to_string_pretty(&SweepReport {
+            command,
+            date: &date,
+            took_s,
+            cells_run: self.cells_run,
+            cells_reused: self.cells_reused,
+            references_rendered: self.references,
+            cases,
+        })?;
+        write("results.json", json.as_bytes())?;
+        write(
+            "index.html",
+            report::index_html(cases, command, took_s, &date).as_bytes(),
+        )?;
+        Ok(json)
+    }
+}
+
+/// Each case's cells as a table, the Pareto front marked.
+fn print_cases(cases: &[CaseResult]) {
+    for case in cases {
         println!("{}", case.case.title());
         let front = case.pareto();
         let mut t = Table::new(&[
@@ -355,15 +453,6 @@ pub fn run(args: &SweepArgs, quiet: bool) -> anyhow::Result<()> {
         }
         print!("{}", t.render());
     }
-    println!(
-        "{} cells run, {} reused, {} references rendered; {:.1} s; backend {backend_name}; medians of {runs} runs; written to {}",
-        run_count,
-        reused,
-        references,
-        took_s,
-        out.join("index.html").display()
-    );
-    outcome
 }
 
 /// The running executable as a build: its size and modification time. A rebuilt workbench

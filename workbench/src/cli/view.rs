@@ -12,8 +12,8 @@ use anyhow::Context;
 use clap::Args;
 use ghost_raytrace::scene::{LightSpec, Quality};
 
-use crate::backend::BackendChoice;
-use crate::cli::render::{StarburstMode, parse_size};
+use super::render::parse_size;
+use crate::flare::{BackendChoice, StarburstMode};
 use crate::lens_library;
 use crate::viewer::offscreen::Offscreen;
 use crate::viewer::window::{self, OnClose, WindowApp};

@@ -15,16 +15,8 @@ use super::cell::{
 use super::document::{Document, Edit, EditError, Header};
 use super::files::recovery_path;
 use super::keymap::KeyMode;
-use super::view;
-
-/// Where the selection is.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Focus {
-    /// A field of the header form (index into `HeaderField::ALL`).
-    Header(usize),
-    /// A cell of the surface table (surface, index into `Column::ALL`).
-    Cell { row: usize, col: usize },
-}
+pub use super::layout::Focus;
+use super::layout::{hit_test, table_rows};
 
 /// What the text line at the bottom is for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -232,7 +224,13 @@ impl App {
         match a {
             Action::Move(m) => self.move_focus(m),
             Action::Click { x, y } => {
-                if let Some(f) = view::hit_test(self, x, y) {
+                if let Some(f) = hit_test(
+                    self.size,
+                    self.scroll,
+                    self.doc.system().surfaces.len(),
+                    x,
+                    y,
+                ) {
                     self.focus = f;
                 }
             }
@@ -724,7 +722,7 @@ impl App {
 
     /// Scrolls the table so the selected row is visible.
     fn ensure_visible(&mut self) {
-        let visible = view::table_rows(self.size).max(1);
+        let visible = table_rows(self.size).max(1);
         let row = match self.focus {
             Focus::Cell { row, .. } => row,
             Focus::Header(_) => 0,

@@ -7,6 +7,7 @@
 //! - `cell`: columns, cell display, parsing and validation of typed values, the cell editor
 //! - `action`, `keymap`: actions and effects; keys per mode and the key map
 //! - `app`: the editor state and `update`
+//! - `layout`: the screen areas, table rows and hit-testing, shared by `app` and `view`
 //! - `analysis`: paraxial data, lens outline, ray fans, ghosts
 //! - `view`: drawing (table, header form, analysis panel, ghost list, side view, help)
 //! - `files`: opening, atomic saving, the recovery file, running effects
@@ -20,6 +21,7 @@ pub mod cell;
 pub use crate::document;
 pub mod files;
 pub mod keymap;
+pub mod layout;
 pub mod runner;
 pub mod view;
 

@@ -15,7 +15,7 @@ use flarebench_sdk::frame::Frame;
 use flarebench_sdk::ghost::ReflectionOrder;
 use flarebench_sdk::image::HdrImage;
 use ghost_raytrace::ghosts::{self, RenderOptions};
-use ghost_raytrace::plan::{self, LensTables, PlanOptions};
+use ghost_raytrace::plan::{LensTables, PlanOptions};
 use ghost_raytrace::plugin::{GhostRaytrace, plan_options};
 use ghost_raytrace::reference::reference_by_ghost;
 use ghost_raytrace::scene::LightSpec;
@@ -23,7 +23,7 @@ use ghost_raytrace::scene::LightSpec;
 use super::moments::Moments;
 use super::points::{BUILTIN, Point, split_algo};
 use super::{CellResult, GhostError, ReferenceRecord};
-use crate::backend::GhostBackend;
+use crate::flare::{Flare, Preset, Scene as FlareScene, StarburstMode};
 use crate::plugin_dirs;
 use crate::stats::median;
 
@@ -105,19 +105,20 @@ fn param_text(info: &[ParamInfo], values: &[f64]) -> String {
         .join(",")
 }
 
-/// Times `point` on the scene: one warm-up run, then `runs` timed ones, drawn by `backend`.
+/// Times `point` on the scene: one warm-up run, then `runs` timed ones, drawn by `flare`'s
+/// backend.
 pub fn measure(
     scene: &CaseScene<'_>,
     point: &Point,
     runs: usize,
-    backend: &mut GhostBackend,
+    flare: &mut Flare,
     plugins: &[PathBuf],
 ) -> Result<Measurement> {
     let (name, text) = split_algo(&point.algo);
     if name == BUILTIN {
-        measure_builtin(scene, text, runs, backend)
+        measure_builtin(scene, text, runs, flare)
     } else {
-        measure_plugin(scene, name, text, runs, backend, plugins)
+        measure_plugin(scene, name, text, runs, flare, plugins)
     }
 }
 
@@ -125,7 +126,7 @@ fn measure_builtin(
     scene: &CaseScene<'_>,
     text: &str,
     runs: usize,
-    backend: &mut GhostBackend,
+    flare: &mut Flare,
 ) -> Result<Measurement> {
     let info = builtin_params();
     let values = parse_values(&info, text)?;
@@ -135,29 +136,24 @@ fn measure_builtin(
         ..plan_options(&Params::new(&specs, &values)).map_err(|e| anyhow!("{e}"))?
     };
     let lights = std::slice::from_ref(scene.light);
+    let frame_scene = FlareScene {
+        starburst: StarburstMode::Off,
+        ..FlareScene::new(scene.system, lights, scene.aperture, scene.frame)
+    };
+    let preset = Preset::new(opts);
     let (mut times, mut plan_times, mut render_times) = (vec![], vec![], vec![]);
     let mut last = None;
     for run in 0..=runs {
-        let t0 = Instant::now();
-        let plans = plan::plan(scene.system, lights, &scene.frame, &opts)?;
-        let plan_ms = ms(t0);
-        let t1 = Instant::now();
-        let (img, _) = backend.render(
-            scene.system,
-            scene.aperture,
-            scene.frame,
-            &plans,
-            RenderOptions::default(),
-        )?;
-        let render_ms = ms(t1);
+        let r = flare.render(&frame_scene, &preset)?;
         if run > 0 {
-            times.push(ms(t0));
-            plan_times.push(plan_ms);
-            render_times.push(render_ms);
+            times.push(r.timings.total_ms());
+            plan_times.push(r.timings.plan_ms);
+            render_times.push(r.timings.ghosts_ms);
         }
-        last = Some((plans, img));
+        last = Some(r.plans);
     }
-    let (plans, image) = last.expect("at least the warm-up run");
+    let plans = last.expect("at least the warm-up run");
+    let image = flare.take_image();
     let culled = plans[0].culled_share;
     let ghosts_drawn = plans[0].ghosts.len();
     let ghosts_total = ghosts_drawn + plans[0].dropped.len();
@@ -187,7 +183,7 @@ fn measure_plugin(
     name: &str,
     text: &str,
     runs: usize,
-    backend: &mut GhostBackend,
+    flare: &mut Flare,
     plugins: &[PathBuf],
 ) -> Result<Measurement> {
     let plugin = plugin_dirs::find(name, plugins)?;
@@ -204,7 +200,9 @@ fn measure_plugin(
     let mut drawn = 0;
     for run in 0..=runs {
         let t = Instant::now();
-        let out = backend.render_plugin(&mut inst, &abi_scene, &values, &mut image)?;
+        let out = flare
+            .backend_mut()
+            .render_plugin(&mut inst, &abi_scene, &values, &mut image)?;
         if run > 0 {
             times.push(ms(t));
         }

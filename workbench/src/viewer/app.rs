@@ -20,9 +20,8 @@ use super::lens_view::{self, LensCamera, LensOverlay};
 use super::plugins::{PluginWatcher, SharedWaker, ViewerAlgo, WatchEvent};
 use super::status;
 use crate::algo_spec::Algo;
-use crate::backend::BackendChoice;
-use crate::cli::render::StarburstMode;
 use crate::document::Change;
+use crate::flare::{BackendChoice, StarburstMode};
 use crate::lens_drawing::{self, LensDrawing, RayFan};
 use crate::link::{FromEditor, ToEditor};
 
@@ -603,8 +602,21 @@ impl Viewer {
                 ui.label(status::help_line());
             });
         });
+        let hovered = self.hovered_description();
         egui::Panel::bottom("viewer-status").show(ui, |ui| {
-            status::show(ui, self);
+            status::show(
+                ui,
+                status::StatusState {
+                    message: self.message.as_deref(),
+                    frame: self.shown.as_ref(),
+                    selected_ghost: self.selected_ghost,
+                    solo: self.scene.solo.is_some(),
+                    debug_view: self.debug_view,
+                    algos: self.algos(),
+                    active_algo: self.active_algo(),
+                    hovered: hovered.as_deref(),
+                },
+            );
         });
         let half = (ui.available_width() * 0.42).max(120.0);
         egui::Panel::left("viewer-lens")
@@ -627,7 +639,18 @@ impl Viewer {
                 }
             });
         egui::CentralPanel::default().show(ui, |ui| {
-            let (rect, action) = flare_view::show(ui, self);
+            let state = flare_view::FlareViewState {
+                system: &self.system,
+                width: self.scene.width,
+                height: self.scene.height,
+                texture: self.texture.as_ref(),
+                shown: self.shown.as_ref(),
+                selected_ghost: self.selected_ghost,
+                labels: self.labels,
+                debug_view: self.debug_view,
+                debug_state: self.debug_state(),
+            };
+            let (rect, action) = flare_view::show(ui, state);
             self.log_rect(1, "flare", rect);
             self.apply(action);
         });

@@ -5,7 +5,9 @@
 use egui::{Align2, Color32, FontId, Pos2, Rect, Sense, Stroke, Ui, pos2, vec2};
 use flarebench_sdk::ghost::GhostPath;
 
-use super::app::Viewer;
+use flarebench_sdk::LensSystem;
+
+use super::debug_view::{DebugState, DebugView};
 use super::flare_worker::{FlareFrame, GhostFootprint};
 
 /// What the user did in the flare view this pass.
@@ -67,15 +69,44 @@ fn density(g: &GhostFootprint) -> f64 {
     g.energy_share / ((x1 - x0) * (y1 - y0)).max(1e-12)
 }
 
+/// What the flare view draws.
+#[derive(Clone, Copy)]
+pub struct FlareViewState<'a> {
+    pub system: &'a LensSystem,
+    /// The scene's image size (pixels).
+    pub width: usize,
+    pub height: usize,
+    /// The shown frame and its image uploaded (`None` before the first frame).
+    pub texture: Option<&'a egui::TextureHandle>,
+    pub shown: Option<&'a FlareFrame>,
+    pub selected_ghost: Option<GhostPath>,
+    /// Label every ghost, not only the selected one.
+    pub labels: bool,
+    pub debug_view: DebugView,
+    pub debug_state: DebugState<'a>,
+}
+
+impl std::fmt::Debug for FlareViewState<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("FlareViewState")
+            .field("width", &self.width)
+            .field("height", &self.height)
+            .field("selected_ghost", &self.selected_ghost)
+            .field("labels", &self.labels)
+            .field("debug_view", &self.debug_view)
+            .finish_non_exhaustive()
+    }
+}
+
 /// Draws the flare view; returns where it is (points) and what the user did.
-pub fn show(ui: &mut Ui, viewer: &Viewer) -> (Rect, FlareAction) {
+pub fn show(ui: &mut Ui, viewer: FlareViewState<'_>) -> (Rect, FlareAction) {
     let area = ui.available_rect_before_wrap();
-    let (w, h) = (viewer.scene.width, viewer.scene.height);
+    let (w, h) = (viewer.width, viewer.height);
     let rect = fit_rect(area, w, h);
     let response = ui.allocate_rect(rect, Sense::click_and_drag());
     let painter = ui.painter_at(rect);
     painter.rect_filled(rect, 0.0, Color32::BLACK);
-    match (&viewer.texture, &viewer.shown) {
+    match (viewer.texture, viewer.shown) {
         (Some(tex), Some(_)) => {
             painter.image(
                 tex.id(),
@@ -94,12 +125,12 @@ pub fn show(ui: &mut Ui, viewer: &Viewer) -> (Rect, FlareAction) {
             );
         }
     }
-    let system = viewer.system();
+    let system = viewer.system;
     let film = [
         system.film_width_mm,
         system.film_width_mm * h as f64 / w as f64,
     ];
-    if let Some(frame) = &viewer.shown {
+    if let Some(frame) = viewer.shown {
         draw_labels(
             &painter,
             rect,
@@ -109,7 +140,7 @@ pub fn show(ui: &mut Ui, viewer: &Viewer) -> (Rect, FlareAction) {
             viewer.labels,
         );
     }
-    super::debug_view::draw(&painter, rect, viewer.debug_view(), viewer.debug_state());
+    super::debug_view::draw(&painter, rect, viewer.debug_view, viewer.debug_state);
 
     let mut action = FlareAction::None;
     if response.hovered() {
@@ -127,7 +158,7 @@ pub fn show(ui: &mut Ui, viewer: &Viewer) -> (Rect, FlareAction) {
             action = FlareAction::MoveLight { theta, phi };
         }
     } else if response.clicked()
-        && let (Some(pos), Some(frame)) = (response.interact_pointer_pos(), &viewer.shown)
+        && let (Some(pos), Some(frame)) = (response.interact_pointer_pos(), viewer.shown)
         && let Some(g) = ghost_at(frame, film, to_pixel(rect, w, h, pos))
     {
         action = FlareAction::SelectGhost(g.path);

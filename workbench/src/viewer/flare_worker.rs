@@ -3,12 +3,14 @@
 //! then on request the error against the dense reference). A job that arrives while one renders
 //! replaces the waiting one (the newest edit wins; a stale job is dropped, never queued), and
 //! the frames of a superseded job are not sent. A panic in a render is caught and reported;
-//! the worker keeps serving.
+//! the worker keeps serving. Each frame is drawn by one [`Flare`] kept on the thread (the
+//! backend, the starburst patterns, the lens's tables and the last frame's ghost rectangles
+//! kept with it), as every command draws its frames.
 //!
 //! A job may name a ghost plugin ([`PluginJob`], `view --algo`) instead of the built-in
 //! renderer: the plugin has no presets, so it is rendered once per job (the settled stage) with
 //! its parameters, its mesh drawn by the backend as `compare` draws it
-//! (`GhostBackend::render_plugin`), the starbursts added as for the built-in renderer. Its
+//! (`Flare::render_plugin`), the starbursts added as for the built-in renderer. Its
 //! instance is kept from job to job (prepared again when the lens changes, made anew for
 //! another plugin or a reloaded library).
 
@@ -20,21 +22,18 @@ use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use flarebench_sdk::LensSystem;
-use flarebench_sdk::abi::author::Scene;
 use flarebench_sdk::abi::host::{LoadedPlugin, PluginInstance};
 use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::frame::Frame;
 use flarebench_sdk::ghost::{GhostPath, ReflectionOrder};
 use flarebench_sdk::image::HdrImage;
-use flarebench_sdk::starburst::{StarburstCache, StarburstSettings};
-use ghost_raytrace::ghosts::RenderOptions;
-use ghost_raytrace::plan::{self, LensTables, PlanOptions, WarmStart};
+use ghost_raytrace::plan::PlanOptions;
 use ghost_raytrace::scene::{LightSpec, Quality};
 use rayon::prelude::*;
 
-use crate::backend::{BackendChoice, BackendReport, GhostBackend};
-use crate::cli::render::{GHOST_HEADROOM_EV, StarburstMode, frame_for, lit_exposure};
-use crate::compose::StarburstSetup;
+use crate::flare::{
+    BackendChoice, BackendReport, Flare, GhostBackend, Preset, Scene, StarburstMode, frame_for,
+};
 use crate::output::{ToneMap, ToneOperator, ToneTable};
 use crate::report::ErrorReport;
 
@@ -420,21 +419,16 @@ pub fn panic_message(p: &(dyn std::any::Any + Send)) -> String {
     }
 }
 
-/// The backend, the starburst cache and the lens's tables, kept from frame to frame.
+/// The flare renderer (backend, starburst patterns, lens tables, warm starts) and the bounds
+/// tables, kept from frame to frame.
 struct Renderer {
-    backend: GhostBackend,
-    starbursts: StarburstCache,
-    /// The lens's interface tables every 10 nm (rebuilt when the lens changes).
-    lens_tables: Option<LensTables>,
+    flare: Flare,
     /// The lens's ghost bounds over the light's angles, built while idle.
     tabulation: Option<BoundsTabulation>,
     /// The tabulation of the lens before the last edit: the fast frames of the edited lens
     /// look its bounds up there (when its ghosts are the same) until the edited lens's own
     /// table covers the lights.
     previous_tabulation: Option<BoundsTabulation>,
-    /// The last frame's ghost rectangles, light by light (before `solo`): a fast frame that
-    /// traces its bounds starts each ghost's search there (`PlanOptions::warm_start`).
-    last_plans: Vec<WarmStart>,
     /// Why the backend asked for could not be opened (the CPU is used instead).
     fallback: Option<String>,
     /// The instance of the last job's plugin.
@@ -451,27 +445,19 @@ struct PluginState {
 
 impl Renderer {
     fn open(choice: BackendChoice) -> Renderer {
-        match GhostBackend::open(choice) {
-            Ok(backend) => Renderer {
-                backend,
-                starbursts: StarburstCache::new(),
-                lens_tables: None,
-                tabulation: None,
-                previous_tabulation: None,
-                last_plans: Vec::new(),
-                fallback: None,
-                plugin: None,
-            },
-            Err(e) => Renderer {
-                backend: GhostBackend::open(BackendChoice::Cpu).expect("the CPU backend opens"),
-                starbursts: StarburstCache::new(),
-                lens_tables: None,
-                tabulation: None,
-                previous_tabulation: None,
-                last_plans: Vec::new(),
-                fallback: Some(format!("{e:#}; drawing on the CPU")),
-                plugin: None,
-            },
+        let (backend, fallback) = match GhostBackend::open(choice) {
+            Ok(backend) => (backend, None),
+            Err(e) => (
+                GhostBackend::open(BackendChoice::Cpu).expect("the CPU backend opens"),
+                Some(format!("{e:#}; drawing on the CPU")),
+            ),
+        };
+        Renderer {
+            flare: Flare::on(backend),
+            tabulation: None,
+            previous_tabulation: None,
+            fallback,
+            plugin: None,
         }
     }
 
@@ -503,15 +489,10 @@ impl Renderer {
             None,
             ReflectionOrder::Two,
         )?;
-        let c = settled.hdr.compare(&reference)?;
         let mut f = settled.clone();
         f.stage = Stage::Reference;
         f.stats.reference_ms = Some(ms(t));
-        f.error = Some(ErrorReport {
-            relative_rmse: c.relative_rmse,
-            relative_l1: c.relative_l1,
-            energy_error: c.energy_error,
-        });
+        f.error = Some(ErrorReport::between(&settled.hdr, &reference)?);
         Ok(f)
     }
 
@@ -534,9 +515,6 @@ impl Renderer {
         let mut stats = FrameStats::default();
 
         let t = Instant::now();
-        if self.lens_tables.as_ref().is_none_or(|l| !l.is_for(sys)) {
-            self.lens_tables = Some(LensTables::new(sys));
-        }
         if self
             .tabulation
             .as_ref()
@@ -578,50 +556,38 @@ impl Renderer {
         };
         stats.bounds_from_table = table.is_some();
         stats.bounds_from_previous_lens = previous;
-        let mut preset = PlanOptions::for_quality(quality, table);
-        preset.lens_tables = self.lens_tables.as_ref();
         // Without a table, a fast frame's search starts from the last frame's rectangles (the
         // lens before an edit, the light before a move); the settled frame searches afresh.
-        if stage == Stage::Fast && self.last_plans.len() == scene.lights.len() {
-            preset.warm_start = Some(&self.last_plans);
-            stats.warm_started = table.is_none();
-        }
-        let mut plans = if scene.starburst == StarburstMode::Only {
-            Vec::new()
-        } else {
-            plan::plan(sys, &scene.lights, &frame, &preset)?
+        let preset = Preset {
+            lens_tables: true,
+            warm_start: stage == Stage::Fast,
+            solo: scene.solo,
+            exposure: true,
+            ..Preset::new(PlanOptions::for_quality(quality, table))
         };
-        if !plans.is_empty() {
-            self.last_plans = plans.iter().map(WarmStart::of).collect();
-        }
-        stats.plan_ms = ms(t);
+        let tables_ms = ms(t);
+        let r = self
+            .flare
+            .render(&flare_scene(sys, scene, frame), &preset)?;
+        stats.plan_ms = tables_ms + r.timings.plan_ms;
+        stats.warm_started = r.warm_started && table.is_none();
+        stats.ghosts_ms = r.timings.ghosts_ms;
+        stats.starburst_ms = r.timings.starburst_ms;
+        stats.auto_exposure_ev = r.exposure_ev.unwrap_or(0.0);
 
         let t = Instant::now();
-        let debug = job.debug.map(|path| match plans.first() {
-            Some(p) => ghost_debug::compute(sys, &scene.aperture, frame, p, path).map(Arc::new),
-            None => Err("no ghosts are drawn (starburst only)".to_string()),
-        });
+        let debug = job.debug.map(
+            |path| match r.planned.as_ref().unwrap_or(&r.plans).first() {
+                Some(p) => ghost_debug::compute(sys, &scene.aperture, frame, p, path).map(Arc::new),
+                None => Err("no ghosts are drawn (starburst only)".to_string()),
+            },
+        );
         if debug.is_some() {
             stats.debug_ms = Some(ms(t));
         }
-        if let Some(solo) = &scene.solo {
-            for p in &mut plans {
-                p.ghosts.retain(|g| g.path == *solo);
-            }
-        }
-
-        let t = Instant::now();
-        let (mut img, ghost_stats) = self.backend.render(
-            sys,
-            &scene.aperture,
-            frame,
-            &plans,
-            RenderOptions::default(),
-        )?;
-        stats.ghosts_ms = ms(t);
         let (mut total, mut dropped) = (0.0, 0.0);
         let mut ghosts = Vec::new();
-        for (l, (p, s)) in plans.iter().zip(&ghost_stats).enumerate() {
+        for (l, (p, s)) in r.plans.iter().zip(&r.ghost_stats).enumerate() {
             let (t, d) = p.energy();
             total += t;
             dropped += d;
@@ -640,29 +606,8 @@ impl Renderer {
             }));
         }
         stats.dropped_energy_fraction = if total > 0.0 { dropped / total } else { 0.0 };
-        stats.culled_energy_fraction = plans.iter().map(|p| p.culled_share).fold(0.0, f64::max);
-        stats.auto_exposure_ev = lit_exposure(&img).map_or(0.0, |ev| ev + GHOST_HEADROOM_EV);
-
-        let t = Instant::now();
-        if scene.starburst != StarburstMode::Off {
-            let setup = StarburstSetup {
-                aperture: &scene.aperture,
-                dust: None,
-                settings: StarburstSettings::default(),
-            };
-            self.backend.add_starbursts(
-                &mut img,
-                sys,
-                &frame,
-                &scene.lights,
-                &setup,
-                &mut self.starbursts,
-            )?;
-            if plans.is_empty() {
-                stats.auto_exposure_ev = lit_exposure(&img).unwrap_or(0.0);
-            }
-        }
-        stats.starburst_ms = ms(t);
+        stats.culled_energy_fraction = r.plans.iter().map(|p| p.culled_share).fold(0.0, f64::max);
+        let img = self.flare.take_image();
 
         Ok(self.finish(
             job,
@@ -702,8 +647,8 @@ impl Renderer {
             mesh_triangles: 0,
             prepare_ms: None,
         };
-        let mut img = HdrImage::new(frame.width, frame.height);
-        if scene.starburst != StarburstMode::Only {
+        let drawing = scene.starburst.ghosts();
+        if drawing {
             if !self
                 .plugin
                 .as_ref()
@@ -735,53 +680,33 @@ impl Renderer {
                 info.prepare_ms = Some(ms(t));
                 stats.plan_ms = ms(t);
             }
-            let abi_scene = Scene {
-                lights: scene.lights.iter().map(LightSpec::scene_light).collect(),
-                frame,
-                aperture: scene.aperture.clone(),
-            };
-            let t = Instant::now();
+        }
+        let instance = self
+            .plugin
+            .as_mut()
+            .filter(|_| drawing)
+            .map(|s| (&mut s.instance, p.values.as_slice()));
+        let (r, drawn) =
             match self
-                .backend
-                .render_plugin(&mut state.instance, &abi_scene, &p.values, &mut img)
+                .flare
+                .render_plugin(&flare_scene(sys, scene, frame), instance, true)
             {
-                Ok(out) => {
-                    info.items_drawn = out.items_drawn;
-                    info.mesh_triangles = out.mesh_triangles;
-                }
+                Ok(r) => r,
                 Err(e) => {
                     self.plugin = None;
                     return Err(e.context(format!("plugin `{}`", p.spec)));
                 }
-            }
-            stats.ghosts_ms = ms(t);
+            };
+        if let Some(out) = drawn {
+            info.items_drawn = out.items_drawn;
+            info.mesh_triangles = out.mesh_triangles;
             stats.ghosts_drawn = info.items_drawn as usize;
             stats.triangles = info.mesh_triangles;
-            stats.auto_exposure_ev = lit_exposure(&img).map_or(0.0, |ev| ev + GHOST_HEADROOM_EV);
         }
-
-        let t = Instant::now();
-        if scene.starburst != StarburstMode::Off {
-            let setup = StarburstSetup {
-                aperture: &scene.aperture,
-                dust: None,
-                settings: StarburstSettings::default(),
-            };
-            // On the CPU whatever the backend: the GPU's starburst pass composites onto its
-            // own output, which holds the plugin's mesh but not its own pixels.
-            crate::compose::add_starbursts(
-                &mut img,
-                sys,
-                &frame,
-                &scene.lights,
-                &setup,
-                &mut self.starbursts,
-            )?;
-            if scene.starburst == StarburstMode::Only {
-                stats.auto_exposure_ev = lit_exposure(&img).unwrap_or(0.0);
-            }
-        }
-        stats.starburst_ms = ms(t);
+        stats.ghosts_ms = r.timings.ghosts_ms;
+        stats.starburst_ms = r.timings.starburst_ms;
+        stats.auto_exposure_ev = r.exposure_ev.unwrap_or(0.0);
+        let img = self.flare.take_image();
 
         Ok(self.finish(
             job,
@@ -813,7 +738,7 @@ impl Renderer {
         let rgba = tone_rgba(&img, stats.auto_exposure_ev + offset);
         stats.tone_ms = ms(t);
         stats.total_ms = ms(t0);
-        let mut backend = self.backend.report().clone();
+        let mut backend = self.flare.backend().report().clone();
         if let Some(why) = &self.fallback {
             backend.note = Some(why.clone());
         }
@@ -866,6 +791,15 @@ pub fn tone_rgba(img: &HdrImage, exposure_ev: f32) -> Vec<u8> {
             }
         });
     out
+}
+
+/// The flare layer's scene of a view's scene on `frame`: its lights, aperture and starburst
+/// mode, the starbursts by the default settings.
+fn flare_scene<'a>(system: &'a LensSystem, scene: &'a FlareScene, frame: Frame) -> Scene<'a> {
+    Scene {
+        starburst: scene.starburst,
+        ..Scene::new(system, &scene.lights, &scene.aperture, frame)
+    }
 }
 
 /// The frame of the flare view for `system` at `width × height` (the film's width across).

@@ -33,5 +33,5 @@ pub mod status;
 pub mod window;
 
 /// The starburst mode of [`ViewerOptions`] (`render --starburst`).
-pub use crate::cli::render::StarburstMode;
+pub use crate::flare::StarburstMode;
 pub use app::{EditorLink, Viewer, ViewerOptions};

@@ -5,8 +5,11 @@
 
 use egui::{Color32, RichText, Ui};
 
-use super::app::Viewer;
+use flarebench_sdk::ghost::GhostPath;
+
+use super::debug_view::DebugView;
 use super::flare_worker::{FlareFrame, Stage};
+use super::plugins::ViewerAlgo;
 
 /// The controls, for the help line.
 pub fn help_line() -> &'static str {
@@ -98,17 +101,20 @@ pub fn frame_line(f: &FlareFrame) -> String {
     line
 }
 
-/// The renderer in use, when plugins were given: the built-in one, or the plugin with its
-/// library and reloads; and the last failed reload of that library, if any.
-pub fn renderer_line(v: &Viewer) -> Option<(String, Option<String>)> {
-    if v.algos().is_empty() {
+/// The renderer in use, when plugins were given (`algos`): the built-in one, or the plugin
+/// `active` with its library and reloads; and the last failed reload of that library, if any.
+pub fn renderer_line(
+    algos: &[ViewerAlgo],
+    active: Option<&ViewerAlgo>,
+) -> Option<(String, Option<String>)> {
+    if algos.is_empty() {
         return None;
     }
-    Some(match v.active_algo() {
+    Some(match active {
         None => (
             format!(
                 "renderer: built-in (A: {})",
-                v.algos()
+                algos
                     .iter()
                     .map(|a| a.spec.as_str())
                     .collect::<Vec<_>>()
@@ -151,9 +157,26 @@ pub fn backend_line(f: &FlareFrame) -> String {
     s
 }
 
+/// What the status lines show.
+#[derive(Clone, Copy, Debug)]
+pub struct StatusState<'a> {
+    /// The last message (a failed or panicked render, a reload, a save).
+    pub message: Option<&'a str>,
+    pub frame: Option<&'a FlareFrame>,
+    pub selected_ghost: Option<GhostPath>,
+    /// The selected ghost is drawn alone.
+    pub solo: bool,
+    pub debug_view: DebugView,
+    /// The plugins given, and the one in use.
+    pub algos: &'a [ViewerAlgo],
+    pub active_algo: Option<&'a ViewerAlgo>,
+    /// What is under the mouse in the lens view.
+    pub hovered: Option<&'a str>,
+}
+
 /// Draws the status lines.
-pub fn show(ui: &mut Ui, v: &Viewer) {
-    if let Some(m) = &v.message {
+pub fn show(ui: &mut Ui, v: StatusState<'_>) {
+    if let Some(m) = v.message {
         let colour = if m.contains("panicked") || m.contains("failed") {
             Color32::from_rgb(220, 60, 60)
         } else {
@@ -161,17 +184,17 @@ pub fn show(ui: &mut Ui, v: &Viewer) {
         };
         ui.label(RichText::new(m).color(colour));
     }
-    match v.frame_shown() {
+    match v.frame {
         Some(f) => {
             ui.label(frame_line(f));
             let mut extra = backend_line(f);
-            if let Some(g) = v.selected_ghost() {
+            if let Some(g) = v.selected_ghost {
                 extra += &format!(" · ghost {g}");
-                if v.scene().solo.is_some() {
+                if v.solo {
                     extra += " alone";
                 }
-                if v.debug_view() != super::debug_view::DebugView::Off {
-                    extra += &format!(" · debug view {}", v.debug_view().name());
+                if v.debug_view != DebugView::Off {
+                    extra += &format!(" · debug view {}", v.debug_view.name());
                 }
             }
             ui.label(extra);
@@ -180,7 +203,7 @@ pub fn show(ui: &mut Ui, v: &Viewer) {
             ui.label("rendering the first frame…");
         }
     }
-    if let Some((line, error)) = renderer_line(v) {
+    if let Some((line, error)) = renderer_line(v.algos, v.active_algo) {
         ui.horizontal_wrapped(|ui| {
             ui.label(line);
             if let Some(e) = error {
@@ -188,7 +211,7 @@ pub fn show(ui: &mut Ui, v: &Viewer) {
             }
         });
     }
-    if let Some(d) = v.hovered_description() {
+    if let Some(d) = v.hovered {
         ui.label(d);
     }
 }

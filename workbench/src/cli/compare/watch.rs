@@ -11,8 +11,8 @@ use serde::Serialize;
 
 use super::{Algo, CompareArgs, CompareReport, Setup, compare, text};
 use crate::algo_spec::reload;
-use crate::backend::GhostBackend;
 use crate::file_watch::{POLL_INTERVAL, WatchedFile};
+use crate::flare::GhostBackend;
 
 /// What the loop prints: as text, or with `--json` as one JSON object per line.
 #[derive(Debug, Serialize)]

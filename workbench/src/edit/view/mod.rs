@@ -1,108 +1,22 @@
-//! Drawing the editor: a pure function of the `App` state into a ratatui `Frame`, and the
-//! layout it uses (shared with mouse hit-testing and scrolling).
+//! Drawing the editor: a pure function of the `App` state into a ratatui `Frame`, in the
+//! areas of `super::layout`.
 
 mod panels;
 mod side_view;
 mod table;
 
 use ratatui::Frame;
-use ratatui::layout::{Constraint, Layout, Rect};
+use ratatui::layout::Rect;
 use ratatui::style::{Color, Modifier, Style};
 use ratatui::text::{Line, Span};
 use ratatui::widgets::{Block, Clear, Paragraph};
 
-use super::app::{App, Focus, LinePurpose, Mode, Prompt};
-use super::cell::{Column, HeaderField, show_header};
+use super::app::{App, LinePurpose, Mode, Prompt};
+use super::cell::{HeaderField, show_header};
 use super::document::Header;
 use super::keymap::KEY_HELP;
-
-/// Width of the row-number column of the table.
-const ROW_LABEL: u16 = 3;
-/// Width of each header field: name, then the numeric fields.
-const HEADER_WIDTHS: [u16; 4] = [40, 18, 16, 16];
-
-/// The screen areas.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Areas {
-    pub title: Rect,
-    pub header: Rect,
-    pub table: Rect,
-    pub analysis: Rect,
-    pub ghosts: Rect,
-    pub side: Rect,
-    pub status: Rect,
-}
-
-/// Total width of the table with its borders.
-fn table_width() -> u16 {
-    let cols: u16 = Column::ALL.iter().map(|c| c.width() + 1).sum();
-    ROW_LABEL + cols + 2
-}
-
-/// Splits the terminal area.
-pub fn layout(area: Rect) -> Areas {
-    let [title, header, body, status] = Layout::vertical([
-        Constraint::Length(1),
-        Constraint::Length(1),
-        Constraint::Min(0),
-        Constraint::Length(1),
-    ])
-    .areas(area);
-    let side_h = (body.height * 2 / 5).max(6).min(body.height);
-    let [top, side] =
-        Layout::vertical([Constraint::Min(0), Constraint::Length(side_h)]).areas(body);
-    let [table, right] =
-        Layout::horizontal([Constraint::Length(table_width()), Constraint::Min(0)]).areas(top);
-    let [analysis, ghosts] =
-        Layout::vertical([Constraint::Length(10), Constraint::Min(0)]).areas(right);
-    Areas {
-        title,
-        header,
-        table,
-        analysis,
-        ghosts,
-        side,
-        status,
-    }
-}
-
-/// How many surface rows the table shows in a terminal of `size` (columns, rows).
-pub fn table_rows(size: (u16, u16)) -> usize {
-    let a = layout(Rect::new(0, 0, size.0, size.1));
-    a.table.height.saturating_sub(3) as usize
-}
-
-/// The cell or header field at screen position (`x`, `y`), if any.
-pub fn hit_test(app: &App, x: u16, y: u16) -> Option<Focus> {
-    let a = layout(Rect::new(0, 0, app.size.0, app.size.1));
-    if y == a.header.y {
-        let mut left = a.header.x;
-        for (i, w) in HEADER_WIDTHS.iter().enumerate() {
-            if x >= left && x < left + w {
-                return Some(Focus::Header(i));
-            }
-            left += w;
-        }
-        return None;
-    }
-    let first_row_y = a.table.y + 2;
-    let rows = table_rows(app.size);
-    if y < first_row_y || y >= first_row_y + rows as u16 {
-        return None;
-    }
-    let row = app.scroll + (y - first_row_y) as usize;
-    if row >= app.doc.system().surfaces.len() {
-        return None;
-    }
-    let mut left = a.table.x + 1 + ROW_LABEL + 1;
-    for (col, c) in Column::ALL.iter().enumerate() {
-        if x >= left && x < left + c.width() {
-            return Some(Focus::Cell { row, col });
-        }
-        left += c.width() + 1;
-    }
-    None
-}
+pub use super::layout::{Areas, hit_test, table_rows};
+use super::layout::{Focus, HEADER_WIDTHS, ROW_LABEL, layout};
 
 /// Draws the whole editor.
 pub fn draw(frame: &mut Frame, app: &App) {

@@ -7,8 +7,9 @@ use ratatui::style::{Color, Modifier, Style};
 use ratatui::widgets::{Block, Cell, Row, Table};
 
 use super::{ROW_LABEL, cell_style};
-use crate::edit::app::{App, Focus, Mode};
+use crate::edit::app::{App, Mode};
 use crate::edit::cell::{Column, show};
+use crate::edit::layout::Focus;
 use flarebench_sdk::SurfaceKind;
 
 pub(super) fn draw(frame: &mut Frame, app: &App, area: Rect) {

@@ -12,7 +12,7 @@ use ghost_raytrace::ghosts::{self, RenderOptions, RenderScratch};
 use ghost_raytrace::plan::LightPlan;
 use ghost_raytrace::scene::LightSpec;
 
-use crate::compose::{StarburstLine, StarburstSetup};
+use super::compose::{StarburstLine, StarburstSetup};
 use crate::output::ToneMap;
 use serde::Serialize;
 
@@ -215,7 +215,8 @@ impl GhostBackend {
         }
     }
 
-    fn cpu(note: Option<String>) -> GhostBackend {
+    /// The CPU rasterizer; `note` says why it was chosen.
+    pub(super) fn cpu(note: Option<String>) -> GhostBackend {
         GhostBackend {
             active: Active::Cpu(RenderScratch::default()),
             report: BackendReport {
@@ -250,12 +251,12 @@ impl GhostBackend {
     ) -> anyhow::Result<Vec<StarburstLine>> {
         match &mut self.active {
             Active::Cpu(_) => {
-                crate::compose::add_starbursts(img, system, frame, lights, setup, cache)
+                super::compose::add_starbursts(img, system, frame, lights, setup, cache)
             }
             #[cfg(feature = "gpu")]
             Active::Gpu(renderer) => {
                 let (lines, splats) =
-                    crate::compose::place_starbursts(system, frame, lights, setup, cache)?;
+                    super::compose::place_starbursts(system, frame, lights, setup, cache)?;
                 renderer.add_starbursts(&splats)?;
                 *img = renderer.read_back()?;
                 self.report.take_passes(renderer.report());
@@ -294,19 +295,42 @@ impl GhostBackend {
         plans: &[LightPlan],
         options: RenderOptions,
     ) -> anyhow::Result<(HdrImage, Vec<Vec<GhostStats>>)> {
+        let mut img = HdrImage::new(frame.width, frame.height);
+        let stats = self.render_into(system, aperture, frame, plans, options, &mut img)?;
+        Ok((img, stats))
+    }
+
+    /// Draws every planned ghost into `img`, replacing what it held (a buffer kept from frame
+    /// to frame is not cleared first; one of another size is made anew); per light, each
+    /// ghost's statistics in plan order. The image is the same, bit for bit, as [`render`]'s.
+    ///
+    /// [`render`]: GhostBackend::render
+    pub fn render_into(
+        &mut self,
+        system: &LensSystem,
+        aperture: &Aperture,
+        frame: Frame,
+        plans: &[LightPlan],
+        options: RenderOptions,
+        img: &mut HdrImage,
+    ) -> anyhow::Result<Vec<Vec<GhostStats>>> {
         match &mut self.active {
             Active::Cpu(scratch) => {
-                let mut img = HdrImage::new(frame.width, frame.height);
-                let stats = ghosts::render_into_reusing(
+                if (img.width, img.height) != (frame.width, frame.height) {
+                    *img = HdrImage::new(frame.width, frame.height);
+                }
+                Ok(ghosts::render_into_reusing(
                     system,
                     aperture,
                     frame,
                     plans,
-                    options,
+                    RenderOptions {
+                        replace: true,
+                        ..options
+                    },
                     scratch,
                     &mut img.pixels,
-                )?;
-                Ok((img, stats))
+                )?)
             }
             #[cfg(feature = "gpu")]
             Active::Gpu(renderer) => {
@@ -314,14 +338,14 @@ impl GhostBackend {
                 let stats =
                     ghosts::draw_into(system, aperture, frame, plans, options, renderer.as_mut())?;
                 let mesh_ms = t.elapsed().as_secs_f64() * 1e3;
-                let img = renderer.read_back()?;
+                *img = renderer.read_back()?;
                 let r = renderer.report();
                 self.report.mesh_ms = Some(mesh_ms);
                 self.report.triangles = Some(r.triangles);
                 self.report.draw_calls = Some(r.draw_calls);
                 self.report.fragments = Some(r.fragments);
                 self.report.take_passes(r);
-                Ok((img, stats))
+                Ok(stats)
             }
         }
     }
