@@ -19,7 +19,7 @@ fn lens(stem: &str) -> LensSystem {
 /// exact ray by ray on its own grid (the search grid `precise` starts from), and the dilated
 /// upper cell sum covers what lies between that grid's vertices; what is left is sampling —
 /// a footprint no vertex of the search grid sees, which `precise` misses as well. Measured
-/// (the figures in docs/ARCHITECTURE.md): the largest traced/bound over every lit
+/// (the figures in docs/accuracy.md): the largest traced/bound over every lit
 /// path of the three small lenses at 0–30° is 0.78 (double Gauss, 0°), on the Nikon zoom
 /// 0.60 (sampled paths, 0–20°). Without the dilation (upper cell sum alone) the Heliar's
 /// 2-0-7-6 at 30° reached 1.66: its 4 × 2 mm footprint covers 6 vertices of the 33² grid.

@@ -1,11 +1,11 @@
-//! The README's transcripts stay true: every `flarebench` command of a `console` block runs as
-//! written (in a temporary directory, one directory per block, commands in order) and its
+//! The transcripts of the README and of every page of `docs/` (`docs/cli.md`, the manual, holds
+//! most) stay true: every `flarebench` command of a `console` block runs as written (in a temporary directory, one directory per block, commands in order) and its
 //! output (standard output, or standard error when there is none) must match the transcript in shape — the same lines, with every number, path and
 //! run of spaces left free. A line `…` in a transcript stands for any number of lines.
 
 mod common;
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use common::temp_dir;
@@ -37,20 +37,34 @@ fn make_fixtures(dir: &Path) {
     .unwrap();
 }
 
-/// The fewest commands the README must have that run here.
-const MIN_CHECKED: usize = 8;
+/// The fewest commands that run here, per document that must have them.
+const MIN_CHECKED: [(&str, usize); 2] = [("README.md", 6), ("docs/cli.md", 12)];
+
+/// The documents whose transcripts are checked, relative to the repository root: the README
+/// and every Markdown page of `docs/`.
+fn documents(root: &Path) -> Vec<PathBuf> {
+    let mut docs: Vec<PathBuf> = std::fs::read_dir(root.join("docs"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "md"))
+        .map(|p| p.strip_prefix(root).unwrap().to_path_buf())
+        .collect();
+    docs.sort();
+    docs.insert(0, PathBuf::from("README.md"));
+    docs
+}
 
 struct Transcript {
-    /// README line of the command.
+    /// Line of the command in its document.
     line: usize,
     args: Vec<String>,
     expected: Vec<String>,
 }
 
 /// The console blocks' commands, grouped by block.
-fn blocks(readme: &str) -> Vec<Vec<Transcript>> {
+fn blocks(doc: &str) -> Vec<Vec<Transcript>> {
     let mut out = Vec::new();
-    let mut lines = readme.lines().enumerate().peekable();
+    let mut lines = doc.lines().enumerate().peekable();
     while let Some((_, l)) = lines.next() {
         if l.trim() != "```console" {
             continue;
@@ -139,52 +153,65 @@ fn matches(expected: &[String], actual: &[String]) -> bool {
 }
 
 #[test]
-fn the_readme_transcripts_match_the_binary_in_shape() {
-    let readme =
-        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../README.md"))
-            .unwrap();
-    let mut checked = 0;
+fn the_transcripts_of_the_readme_and_docs_match_the_binary_in_shape() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let mut checked: Vec<(String, usize)> = Vec::new();
     let mut failures = Vec::new();
-    for block in blocks(&readme) {
-        let tmp = temp_dir("readme");
-        make_fixtures(tmp.path());
-        for t in block {
-            let cmd = t.args.join(" ");
-            if t.args.first().map(String::as_str) != Some("flarebench")
-                || SKIPPED.iter().any(|(s, _)| cmd.contains(s))
-            {
-                continue;
+    for doc in documents(&root) {
+        let name = doc.to_string_lossy().replace('\\', "/");
+        let text = std::fs::read_to_string(root.join(&doc)).unwrap();
+        let mut count = 0;
+        for block in blocks(&text) {
+            let tmp = temp_dir("readme");
+            make_fixtures(tmp.path());
+            for t in block {
+                let cmd = t.args.join(" ");
+                if t.args.first().map(String::as_str) != Some("flarebench")
+                    || SKIPPED.iter().any(|(s, _)| cmd.contains(s))
+                {
+                    continue;
+                }
+                let out = Command::new(env!("CARGO_BIN_EXE_flarebench"))
+                    .args(&t.args[1..])
+                    .current_dir(tmp.path())
+                    .output()
+                    .unwrap();
+                // Standard output; standard error for a command that reports there
+                // (`precompute`) and prints nothing on standard output.
+                let stream = if out.stdout.is_empty() {
+                    &out.stderr
+                } else {
+                    &out.stdout
+                };
+                let actual: Vec<String> = String::from_utf8_lossy(stream)
+                    .lines()
+                    .map(str::to_string)
+                    .collect();
+                if !matches(&t.expected, &actual) {
+                    failures.push(format!(
+                        "{name}:{} `{cmd}`\n--- transcript\n{}\n--- output\n{}\n--- stderr\n{}",
+                        t.line,
+                        t.expected.join("\n"),
+                        actual.join("\n"),
+                        String::from_utf8_lossy(&out.stderr)
+                    ));
+                }
+                count += 1;
             }
-            let out = Command::new(env!("CARGO_BIN_EXE_flarebench"))
-                .args(&t.args[1..])
-                .current_dir(tmp.path())
-                .output()
-                .unwrap();
-            // Standard output; standard error for a command that reports there (`precompute`)
-            // and prints nothing on standard output.
-            let stream = if out.stdout.is_empty() {
-                &out.stderr
-            } else {
-                &out.stdout
-            };
-            let actual: Vec<String> = String::from_utf8_lossy(stream)
-                .lines()
-                .map(str::to_string)
-                .collect();
-            if !matches(&t.expected, &actual) {
-                failures.push(format!(
-                    "README.md:{} `{cmd}`\n--- transcript\n{}\n--- output\n{}\n--- stderr\n{}",
-                    t.line,
-                    t.expected.join("\n"),
-                    actual.join("\n"),
-                    String::from_utf8_lossy(&out.stderr)
-                ));
-            }
-            checked += 1;
         }
+        checked.push((name, count));
     }
     assert!(failures.is_empty(), "{}", failures.join("\n\n"));
-    assert!(checked >= MIN_CHECKED, "{checked} commands checked");
+    for (doc, least) in MIN_CHECKED {
+        let n = checked
+            .iter()
+            .find(|(d, _)| d == doc)
+            .map_or(0, |(_, n)| *n);
+        assert!(
+            n >= least,
+            "{doc}: {n} commands checked, at least {least} expected"
+        );
+    }
 }
 
 #[test]

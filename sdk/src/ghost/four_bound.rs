@@ -33,7 +33,8 @@
 //!   no vertex of the grid sees gets 0 here, but then the precise search (which starts from
 //!   the same vertices) finds no light either.
 //!
-//! Measured against [`bounds::precise`] in `sdk/tests/ghosts.rs` and docs/ARCHITECTURE.md.
+//! Measured against [`bounds::precise`] in `sdk/tests/ghosts.rs` and docs/accuracy.md
+//! (§ Four-reflection energy bound).
 
 use std::collections::HashMap;
 
