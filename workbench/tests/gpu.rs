@@ -3,7 +3,7 @@
 //! and its pass times, and without an adapter `gpu` fails saying what to install while `auto`
 //! renders on the CPU.
 
-mod common;
+use crate::common;
 
 use common::{flarebench, json, temp_dir};
 use flarebench::output::read_exr;

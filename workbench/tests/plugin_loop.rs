@@ -11,7 +11,7 @@
 //! found beside the binary by every other test, and where the sdk is built with other features
 //! (the host's) anyway.
 
-mod common;
+use crate::common;
 
 use std::io::BufRead;
 use std::path::{Path, PathBuf};
