@@ -289,15 +289,11 @@ fn relative_energy(report: &Value) -> f64 {
     1.0 + a["error"]["energy_error"].as_f64().unwrap()
 }
 
-#[test]
-#[ignore = "slow tier: cargo builds the new crate twice (minutes on a clean clone)"]
-fn compare_watch_reloads_a_rebuilt_plugin_and_keeps_it_when_a_broken_library_follows() {
-    let tmp = temp_dir("plugin-watch");
-    let krate = new_plugin("loop-glow");
-    let lib = cargo_build(&krate, "loop_glow");
-    let lens = tmp.path().join("lens.xml");
+/// A copy of the Heliar's lens file in `dir`, and `compare --watch` of the plugin library
+/// `lib` on it (64 × 36, one run, on the CPU, three changes), its events in JSON.
+fn watch_compare(dir: &Path, lib: &Path) -> (PathBuf, Watcher) {
+    let lens = dir.join("lens.xml");
     std::fs::copy(root().join("lenses/heliar-tronnier.xml"), &lens).unwrap();
-    let out = tmp.path().join("cmp.png");
     let w = Watcher::start(
         &[
             "compare",
@@ -312,23 +308,63 @@ fn compare_watch_reloads_a_rebuilt_plugin_and_keeps_it_when_a_broken_library_fol
             "1",
             "--backend",
             "cpu",
-            // The reference is rendered once: the lens reload below reads it back (the
-            // lens is the same system).
+            // The reference is rendered once: the lens reload reads it back (the lens is the
+            // same system).
             "--reference-file",
-            tmp.path().join("reference.exr").to_str().unwrap(),
+            dir.join("reference.exr").to_str().unwrap(),
             "--json",
             "--watch",
             "--watch-events",
             "3",
             "-o",
-            out.to_str().unwrap(),
+            dir.join("cmp.png").to_str().unwrap(),
         ],
-        tmp.path().join("watch.stderr"),
+        dir.join("watch.stderr"),
     );
+    (lens, w)
+}
+
+/// Puts `bytes` at `path` as cargo does, by replacing the file: cargo's library beside the
+/// build is a hard link to the one in `deps/`, which a write in place would corrupt for the
+/// next build.
+fn replace_file(path: &Path, bytes: &[u8]) {
+    let tmp = path.with_extension("new");
+    std::fs::write(&tmp, bytes).unwrap();
+    std::fs::rename(&tmp, path).unwrap();
+}
+
+/// The watched library `lib` broken, then `lens` saved again (one more blank line): the
+/// watcher shows the error, compares again with the plugin of the last good load, and ends
+/// after these, its third change. Returns that comparison.
+fn break_library_then_save_lens(w: &Watcher, lib: &Path, lens: &Path) -> Value {
+    replace_file(lib, b"not a shared library");
+    let failed = w.expect("reload_failed");
+    assert_eq!(failed["what"], "plugin");
+    let error = failed["error"].as_str().unwrap();
+    assert!(
+        error.contains(lib.to_str().unwrap()) && error.contains("could not load the library"),
+        "{error}"
+    );
+    let mut text = std::fs::read_to_string(lens).unwrap();
+    text.push('\n');
+    std::fs::write(lens, text).unwrap();
+    assert_eq!(w.expect("reloaded")["what"], "lens");
+    let third = w.expect("compared");
+    assert!(w.next().is_none(), "nothing after the third change");
+    third
+}
+
+#[test]
+#[ignore = "slow tier: cargo builds the new crate twice (minutes on a clean clone)"]
+fn compare_watch_reloads_a_rebuilt_plugin_and_keeps_it_when_a_broken_library_follows() {
+    let tmp = temp_dir("plugin-watch");
+    let krate = new_plugin("loop-glow");
+    let lib = cargo_build(&krate, "loop_glow");
+    let (lens, w) = watch_compare(tmp.path(), &lib);
     let first = w.expect("compared");
     assert_eq!(param(&first, "gain"), "1");
     let e1 = relative_energy(&first);
-    assert!(out.is_file());
+    assert!(tmp.path().join("cmp.png").is_file());
 
     // Change the gain's default from 1 to 2.5 and rebuild.
     let src = krate.join("src/lib.rs");
@@ -350,30 +386,10 @@ fn compare_watch_reloads_a_rebuilt_plugin_and_keeps_it_when_a_broken_library_fol
         "energy {e1} → {e2}: not 2.5 times"
     );
 
-    // A broken library (put in place as cargo does, by replacing the file: cargo's library
-    // beside the build is a hard link to the one in `deps/`, which a write in place would
-    // corrupt for the next build): the error is shown and the rebuilt plugin stays in use.
-    let broken = lib.with_extension("broken");
-    std::fs::write(&broken, b"not a shared library").unwrap();
-    std::fs::rename(&broken, &lib).unwrap();
-    let failed = w.expect("reload_failed");
-    assert_eq!(failed["what"], "plugin");
-    let error = failed["error"].as_str().unwrap();
-    assert!(
-        error.contains(lib.to_str().unwrap()) && error.contains("could not load the library"),
-        "{error}"
-    );
-    // The lens file saved again (one more blank line): compared again, with the plugin of the
-    // last good load.
-    let mut text = std::fs::read_to_string(&lens).unwrap();
-    text.push('\n');
-    std::fs::write(&lens, text).unwrap();
-    assert_eq!(w.expect("reloaded")["what"], "lens");
-    let third = w.expect("compared");
+    // A broken library: the error is shown and the rebuilt plugin stays in use.
+    let third = break_library_then_save_lens(&w, &lib, &lens);
     assert_eq!(param(&third, "gain"), "2.5");
     assert!((relative_energy(&third) / e2 - 1.0).abs() < GAIN_RATIO_TOL);
-    // Three changes, so the watcher ends by itself.
-    assert!(w.next().is_none(), "nothing after the third change");
 }
 
 /// `compare --watch` without cargo: the library at the watched path is rewritten in place with
@@ -384,45 +400,17 @@ fn compare_watch_reloads_a_rewritten_library_and_keeps_it_when_a_broken_one_foll
     let tmp = temp_dir("plugin-watch-copy");
     let lib = tmp.path().join(library_file_name("watched"));
     std::fs::copy(plugin_library("example_glow"), &lib).unwrap();
-    let lens = tmp.path().join("lens.xml");
-    std::fs::copy(root().join("lenses/heliar-tronnier.xml"), &lens).unwrap();
-    let w = Watcher::start(
-        &[
-            "compare",
-            lens.to_str().unwrap(),
-            "--light",
-            "3,0",
-            "--algo",
-            lib.to_str().unwrap(),
-            "--size",
-            "64x36",
-            "--runs",
-            "1",
-            "--backend",
-            "cpu",
-            "--reference-file",
-            tmp.path().join("reference.exr").to_str().unwrap(),
-            "--json",
-            "--watch",
-            "--watch-events",
-            "3",
-            "-o",
-            tmp.path().join("cmp.png").to_str().unwrap(),
-        ],
-        tmp.path().join("watch.stderr"),
-    );
+    let (lens, w) = watch_compare(tmp.path(), &lib);
     let first = w.expect("compared");
     assert_eq!(first["algorithms"][0]["plugin"], "example-glow", "{first}");
     assert_eq!(param(&first, "gain"), "1");
     let glow_energy = relative_energy(&first);
 
     // Another build at the same path (here the ghost-matrix plugin).
-    let replace = |bytes: &[u8]| {
-        let tmp_file = lib.with_extension("new");
-        std::fs::write(&tmp_file, bytes).unwrap();
-        std::fs::rename(&tmp_file, &lib).unwrap();
-    };
-    replace(&std::fs::read(plugin_library("ghost_matrix")).unwrap());
+    replace_file(
+        &lib,
+        &std::fs::read(plugin_library("ghost_matrix")).unwrap(),
+    );
     let reloaded = w.expect("reloaded");
     assert_eq!(reloaded["what"], "plugin");
     assert_eq!(reloaded["name"], "ghost-matrix");
@@ -438,22 +426,9 @@ fn compare_watch_reloads_a_rewritten_library_and_keeps_it_when_a_broken_one_foll
     );
 
     // A broken library: the error, and the last good one stays in use when the lens changes.
-    replace(b"not a shared library");
-    let failed = w.expect("reload_failed");
-    assert_eq!(failed["what"], "plugin");
-    let error = failed["error"].as_str().unwrap();
-    assert!(
-        error.contains(lib.to_str().unwrap()) && error.contains("could not load the library"),
-        "{error}"
-    );
-    let mut text = std::fs::read_to_string(&lens).unwrap();
-    text.push('\n');
-    std::fs::write(&lens, text).unwrap();
-    assert_eq!(w.expect("reloaded")["what"], "lens");
-    let third = w.expect("compared");
+    let third = break_library_then_save_lens(&w, &lib, &lens);
     assert_eq!(third["algorithms"][0]["plugin"], "ghost-matrix", "{third}");
     assert!((relative_energy(&third) / matrix_energy - 1.0).abs() < GAIN_RATIO_TOL);
-    assert!(w.next().is_none(), "nothing after the third change");
 }
 
 /// A pass of the viewer's UI with no display and no painting (the viewer's state is all the
