@@ -27,27 +27,9 @@ fn context() -> Arc<GpuContext> {
         .clone()
 }
 
-/// The frames' size; the Nikon zoom's default-tier frames are a quarter of it
-/// ([`NIKON_DEFAULT_TIER`]).
-const FULL_SIZE: (usize, usize) = (960, 540);
-
-/// The Nikon zoom's frames in the default tier: at [`FULL_SIZE`] they take minutes on lavapipe
-/// (the slow tier draws them, `docs/tests.md`).
-const NIKON_DEFAULT_TIER: (usize, usize) = (480, 270);
-
 fn record(lens: &str, lights: &[&str], aperture: &Aperture, band_by_band: bool) -> FrameMeshes {
-    record_at(lens, lights, aperture, band_by_band, FULL_SIZE)
-}
-
-fn record_at(
-    lens: &str,
-    lights: &[&str],
-    aperture: &Aperture,
-    band_by_band: bool,
-    (width, height): (usize, usize),
-) -> FrameMeshes {
     let sys = load_lens(lens);
-    let frame = Frame::across_film(width, height, sys.film_width_mm);
+    let frame = Frame::across_film(960, 540, sys.film_width_mm);
     let lights: Vec<LightSpec> = lights
         .iter()
         .map(|l| LightSpec::parse(l).unwrap())
@@ -163,33 +145,22 @@ fn heliar_iris_and_mask() {
 }
 
 /// The Nikon zoom's default frame (fringed groups, two lights), and with an iris and a mask
-/// (fringed too, their outlines stepped over τ), at `size`.
-fn nikon_two_lights_iris_and_mask_at(size: (usize, usize)) {
-    let r = record_at(
+/// (fringed too, their outlines stepped over τ).
+#[test]
+fn nikon_two_lights_iris_and_mask() {
+    let r = record(
         "nikon-zoom-short",
         &["10,30", "4,200,0.5"],
         &Aperture::Circular,
         false,
-        size,
     );
     check("nikon circle, two lights, fringed", &r);
-    let r = record_at("nikon-zoom-short", &["10,30"], &iris(), false, size);
+    let r = record("nikon-zoom-short", &["10,30"], &iris(), false);
     assert!(has_aperture_fringes(&r), "nikon iris: fringed outlines");
     check("nikon iris, fringed", &r);
-    let r = record_at("nikon-zoom-short", &["10,30"], &olf_mask(), false, size);
+    let r = record("nikon-zoom-short", &["10,30"], &olf_mask(), false);
     assert!(has_aperture_fringes(&r), "nikon mask: fringed outlines");
     check("nikon mask, fringed", &r);
-}
-
-#[test]
-fn nikon_two_lights_iris_and_mask() {
-    nikon_two_lights_iris_and_mask_at(NIKON_DEFAULT_TIER);
-}
-
-#[test]
-#[ignore = "slow tier: the Nikon zoom's frames at 960 × 540 (minutes on lavapipe)"]
-fn nikon_two_lights_iris_and_mask_full_size() {
-    nikon_two_lights_iris_and_mask_at(FULL_SIZE);
 }
 
 /// The Heliar's frame with two lights in it (one pattern shared, one of its own colour), drawn
