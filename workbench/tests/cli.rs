@@ -1,6 +1,6 @@
 //! End-to-end tests of the `flarebench` binary: real output, real exit codes.
 
-mod common;
+use crate::common;
 
 use common::{flarebench, json, temp_dir};
 use std::path::PathBuf;

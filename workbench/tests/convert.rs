@@ -1,7 +1,7 @@
 //! End-to-end tests of Zemax and PBRT files on the command line: `convert` to XML, `info` and
 //! `trace` reading them directly, `--config` and `--pbrt-convention`.
 
-mod common;
+use crate::common;
 
 use common::{flarebench, json};
 

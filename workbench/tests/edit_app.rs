@@ -3,7 +3,7 @@
 //! results checked against the optics: the analysis after an edit equals a fresh paraxial
 //! analysis of the edited prescription, saves write the file, recovery files come and go.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 

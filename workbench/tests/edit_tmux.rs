@@ -3,7 +3,7 @@
 //! edit. Skipped with a message when tmux is not installed locally; under CI (`CI` set) a
 //! missing tmux is a failure, since `.ci/run` installs it.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 use std::process::{Command, Output};

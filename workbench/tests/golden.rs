@@ -11,7 +11,7 @@
 //! -p flarebench --test golden` writes them anew (look at the PNGs it writes next to them
 //! before committing).
 
-mod common;
+use crate::common;
 
 use std::path::PathBuf;
 

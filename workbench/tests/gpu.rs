@@ -3,7 +3,7 @@
 //! and its pass times, and without an adapter `gpu` fails saying what to install while `auto`
 //! renders on the CPU.
 
-mod common;
+use crate::common;
 
 use common::{flarebench, json, temp_dir};
 use flarebench::output::read_exr;
@@ -168,6 +168,51 @@ fn without_an_adapter_gpu_says_what_to_install_and_auto_uses_the_cpu() {
             .status
             .success()
     );
+}
+
+/// `auto` looks for a hardware GPU without a word on standard error, also where the window
+/// systems cannot be reached: with `XDG_RUNTIME_DIR` unset, a Vulkan instance with the window
+/// system's surface extensions makes Mesa's device-selection layer try the Wayland compositor,
+/// and libwayland prints an error line for each try.
+#[test]
+fn auto_finds_its_backend_silently_without_a_runtime_directory() {
+    let tmp = temp_dir("gpu-auto-quiet");
+    let out = tmp.path().join("x.exr");
+    let run = |quiet: &str| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_flarebench"))
+            .args([
+                "render",
+                "heliar-tronnier",
+                "--light",
+                "8,60",
+                "--size",
+                "96x54",
+            ])
+            .args(["--backend", "auto", quiet, "-o", out.to_str().unwrap()])
+            .env_remove("XDG_RUNTIME_DIR")
+            .output()
+            .unwrap()
+    };
+    let quiet = run("-q");
+    let err = String::from_utf8_lossy(&quiet.stderr);
+    assert!(quiet.status.success(), "{err}");
+    assert_eq!(
+        err, "",
+        "`render -q --backend auto` wrote to standard error"
+    );
+    let report = run("--json");
+    let err = String::from_utf8_lossy(&report.stderr);
+    assert!(report.status.success(), "{err}");
+    assert!(!err.contains("XDG_RUNTIME_DIR"), "{err}");
+    let v: serde_json::Value = serde_json::from_slice(&report.stdout).unwrap();
+    let b = &v["backend"];
+    match b["backend"].as_str().unwrap() {
+        // A hardware GPU found: `auto` never takes a software one.
+        "gpu" => assert!(b.get("software_adapter").is_none(), "{b}"),
+        // None: the report says why, naming the software adapter if there is one.
+        "cpu" => assert!(b["note"].as_str().unwrap().starts_with("auto: "), "{b}"),
+        other => panic!("backend {other}"),
+    }
 }
 
 /// `apply --backend gpu` adds the flare the CPU adds.

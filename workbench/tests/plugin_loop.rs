@@ -4,6 +4,12 @@
 //! compares again when the lens file changes; the viewer window (`view --algo`) reloads a
 //! rebuilt plugin and renders with its new default.
 //!
+//! The tests that build crates with cargo are in the slow tier (`docs/tests.md`): on a clean
+//! clone their first build takes minutes. The default tier keeps what they check without cargo:
+//! `plugins new` writes the crate and refuses what it must (the crate's code is the example's,
+//! line for line: `plugin_template`'s unit tests; the example is built with the workspace), and
+//! `compare --watch` reloads a library rewritten in place, here with the workspace's plugins.
+//!
 //! The new crates are built with cargo (offline, with the workspace's `Cargo.lock`) into
 //! `target/plugin-tests/`, which persists between runs: the first run compiles the sdk and its
 //! dependencies for the new crates' profile (a few minutes here); later runs compile only the
@@ -11,7 +17,7 @@
 //! found beside the binary by every other test, and where the sdk is built with other features
 //! (the host's) anyway.
 
-mod common;
+use crate::common;
 
 use std::io::BufRead;
 use std::path::{Path, PathBuf};
@@ -107,6 +113,37 @@ fn cargo_build(krate: &Path, lib_name: &str) -> PathBuf {
 }
 
 #[test]
+fn plugins_new_writes_a_crate_and_refuses_a_taken_directory_or_a_bad_name() {
+    let krate = new_plugin("new-crate");
+    for file in ["Cargo.toml", "Cargo.lock", "src/lib.rs"] {
+        assert!(krate.join(file).is_file(), "{file} in {}", krate.display());
+    }
+    let manifest = std::fs::read_to_string(krate.join("Cargo.toml")).unwrap();
+    assert!(manifest.contains("name = \"new-crate\""), "{manifest}");
+    assert!(manifest.contains("\"cdylib\""), "{manifest}");
+
+    // The directory is now taken, and a name cannot name a crate.
+    let out = flarebench(&[
+        "plugins",
+        "new",
+        "new-crate",
+        "--path",
+        krate.to_str().unwrap(),
+    ]);
+    assert!(!out.status.success());
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("already exists and is not empty"),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let out = flarebench(&["plugins", "new", "2fast", "--path", "unused"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("must start with a letter"), "{err}");
+    assert!(!Path::new("unused").exists());
+}
+
+#[test]
+#[ignore = "slow tier: cargo builds the new crate (minutes on a clean clone)"]
 fn plugins_new_writes_a_crate_that_builds_loads_and_draws_what_the_example_draws() {
     let krate = new_plugin("new-glow");
     let lib = cargo_build(&krate, "new_glow");
@@ -164,25 +201,6 @@ fn plugins_new_writes_a_crate_that_builds_loads_and_draws_what_the_example_draws
     let energy: f64 = mine.pixels.iter().map(|p| p[0] as f64).sum();
     assert!(energy > 1.0, "the glow drew {energy}");
     assert!(mine.pixels == example.pixels, "the images differ");
-
-    // Refusals: the directory is now taken, and a name cannot name a crate.
-    let out = flarebench(&[
-        "plugins",
-        "new",
-        "new-glow",
-        "--path",
-        krate.to_str().unwrap(),
-    ]);
-    assert!(!out.status.success());
-    assert!(
-        String::from_utf8_lossy(&out.stderr).contains("already exists and is not empty"),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let out = flarebench(&["plugins", "new", "2fast", "--path", "unused"]);
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("must start with a letter"), "{err}");
-    assert!(!Path::new("unused").exists());
 }
 
 /// The watcher as a child process, its stdout read line by line on a thread; killed when
@@ -271,14 +289,11 @@ fn relative_energy(report: &Value) -> f64 {
     1.0 + a["error"]["energy_error"].as_f64().unwrap()
 }
 
-#[test]
-fn compare_watch_reloads_a_rebuilt_plugin_and_keeps_it_when_a_broken_library_follows() {
-    let tmp = temp_dir("plugin-watch");
-    let krate = new_plugin("loop-glow");
-    let lib = cargo_build(&krate, "loop_glow");
-    let lens = tmp.path().join("lens.xml");
+/// A copy of the Heliar's lens file in `dir`, and `compare --watch` of the plugin library
+/// `lib` on it (64 × 36, one run, on the CPU, three changes), its events in JSON.
+fn watch_compare(dir: &Path, lib: &Path) -> (PathBuf, Watcher) {
+    let lens = dir.join("lens.xml");
     std::fs::copy(root().join("lenses/heliar-tronnier.xml"), &lens).unwrap();
-    let out = tmp.path().join("cmp.png");
     let w = Watcher::start(
         &[
             "compare",
@@ -293,23 +308,63 @@ fn compare_watch_reloads_a_rebuilt_plugin_and_keeps_it_when_a_broken_library_fol
             "1",
             "--backend",
             "cpu",
-            // The reference is rendered once: the lens reload below reads it back (the
-            // lens is the same system).
+            // The reference is rendered once: the lens reload reads it back (the lens is the
+            // same system).
             "--reference-file",
-            tmp.path().join("reference.exr").to_str().unwrap(),
+            dir.join("reference.exr").to_str().unwrap(),
             "--json",
             "--watch",
             "--watch-events",
             "3",
             "-o",
-            out.to_str().unwrap(),
+            dir.join("cmp.png").to_str().unwrap(),
         ],
-        tmp.path().join("watch.stderr"),
+        dir.join("watch.stderr"),
     );
+    (lens, w)
+}
+
+/// Puts `bytes` at `path` as cargo does, by replacing the file: cargo's library beside the
+/// build is a hard link to the one in `deps/`, which a write in place would corrupt for the
+/// next build.
+fn replace_file(path: &Path, bytes: &[u8]) {
+    let tmp = path.with_extension("new");
+    std::fs::write(&tmp, bytes).unwrap();
+    std::fs::rename(&tmp, path).unwrap();
+}
+
+/// The watched library `lib` broken, then `lens` saved again (one more blank line): the
+/// watcher shows the error, compares again with the plugin of the last good load, and ends
+/// after these, its third change. Returns that comparison.
+fn break_library_then_save_lens(w: &Watcher, lib: &Path, lens: &Path) -> Value {
+    replace_file(lib, b"not a shared library");
+    let failed = w.expect("reload_failed");
+    assert_eq!(failed["what"], "plugin");
+    let error = failed["error"].as_str().unwrap();
+    assert!(
+        error.contains(lib.to_str().unwrap()) && error.contains("could not load the library"),
+        "{error}"
+    );
+    let mut text = std::fs::read_to_string(lens).unwrap();
+    text.push('\n');
+    std::fs::write(lens, text).unwrap();
+    assert_eq!(w.expect("reloaded")["what"], "lens");
+    let third = w.expect("compared");
+    assert!(w.next().is_none(), "nothing after the third change");
+    third
+}
+
+#[test]
+#[ignore = "slow tier: cargo builds the new crate twice (minutes on a clean clone)"]
+fn compare_watch_reloads_a_rebuilt_plugin_and_keeps_it_when_a_broken_library_follows() {
+    let tmp = temp_dir("plugin-watch");
+    let krate = new_plugin("loop-glow");
+    let lib = cargo_build(&krate, "loop_glow");
+    let (lens, w) = watch_compare(tmp.path(), &lib);
     let first = w.expect("compared");
     assert_eq!(param(&first, "gain"), "1");
     let e1 = relative_energy(&first);
-    assert!(out.is_file());
+    assert!(tmp.path().join("cmp.png").is_file());
 
     // Change the gain's default from 1 to 2.5 and rebuild.
     let src = krate.join("src/lib.rs");
@@ -331,30 +386,49 @@ fn compare_watch_reloads_a_rebuilt_plugin_and_keeps_it_when_a_broken_library_fol
         "energy {e1} → {e2}: not 2.5 times"
     );
 
-    // A broken library (put in place as cargo does, by replacing the file: cargo's library
-    // beside the build is a hard link to the one in `deps/`, which a write in place would
-    // corrupt for the next build): the error is shown and the rebuilt plugin stays in use.
-    let broken = lib.with_extension("broken");
-    std::fs::write(&broken, b"not a shared library").unwrap();
-    std::fs::rename(&broken, &lib).unwrap();
-    let failed = w.expect("reload_failed");
-    assert_eq!(failed["what"], "plugin");
-    let error = failed["error"].as_str().unwrap();
-    assert!(
-        error.contains(lib.to_str().unwrap()) && error.contains("could not load the library"),
-        "{error}"
-    );
-    // The lens file saved again (one more blank line): compared again, with the plugin of the
-    // last good load.
-    let mut text = std::fs::read_to_string(&lens).unwrap();
-    text.push('\n');
-    std::fs::write(&lens, text).unwrap();
-    assert_eq!(w.expect("reloaded")["what"], "lens");
-    let third = w.expect("compared");
+    // A broken library: the error is shown and the rebuilt plugin stays in use.
+    let third = break_library_then_save_lens(&w, &lib, &lens);
     assert_eq!(param(&third, "gain"), "2.5");
     assert!((relative_energy(&third) / e2 - 1.0).abs() < GAIN_RATIO_TOL);
-    // Three changes, so the watcher ends by itself.
-    assert!(w.next().is_none(), "nothing after the third change");
+}
+
+/// `compare --watch` without cargo: the library at the watched path is rewritten in place with
+/// another of the workspace's plugins (replaced as cargo replaces it), then with a broken file;
+/// the lens file is saved again.
+#[test]
+fn compare_watch_reloads_a_rewritten_library_and_keeps_it_when_a_broken_one_follows() {
+    let tmp = temp_dir("plugin-watch-copy");
+    let lib = tmp.path().join(library_file_name("watched"));
+    std::fs::copy(plugin_library("example_glow"), &lib).unwrap();
+    let (lens, w) = watch_compare(tmp.path(), &lib);
+    let first = w.expect("compared");
+    assert_eq!(first["algorithms"][0]["plugin"], "example-glow", "{first}");
+    assert_eq!(param(&first, "gain"), "1");
+    let glow_energy = relative_energy(&first);
+
+    // Another build at the same path (here the ghost-matrix plugin).
+    replace_file(
+        &lib,
+        &std::fs::read(plugin_library("ghost_matrix")).unwrap(),
+    );
+    let reloaded = w.expect("reloaded");
+    assert_eq!(reloaded["what"], "plugin");
+    assert_eq!(reloaded["name"], "ghost-matrix");
+    let second = w.expect("compared");
+    assert_eq!(
+        second["algorithms"][0]["plugin"], "ghost-matrix",
+        "{second}"
+    );
+    let matrix_energy = relative_energy(&second);
+    assert!(
+        (matrix_energy / glow_energy - 1.0).abs() > 0.01,
+        "the glow's energy {glow_energy} and the ghosts' {matrix_energy}"
+    );
+
+    // A broken library: the error, and the last good one stays in use when the lens changes.
+    let third = break_library_then_save_lens(&w, &lib, &lens);
+    assert_eq!(third["algorithms"][0]["plugin"], "ghost-matrix", "{third}");
+    assert!((relative_energy(&third) / matrix_energy - 1.0).abs() < GAIN_RATIO_TOL);
 }
 
 /// A pass of the viewer's UI with no display and no painting (the viewer's state is all the
@@ -401,6 +475,7 @@ fn viewer_until(
 
 #[cfg(feature = "window")]
 #[test]
+#[ignore = "slow tier: cargo builds the new crate twice (minutes on a clean clone)"]
 fn the_window_reloads_a_rebuilt_plugin_and_renders_with_its_new_default() {
     use flarebench::algo_spec::Algo;
     use flarebench::flare::backend::BackendChoice;

@@ -1,7 +1,7 @@
 //! `plugins list` and `compare` end to end, with the plugin libraries `cargo build --workspace`
 //! puts beside the binary (`target/debug/`).
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 

@@ -3,7 +3,7 @@
 //! output (standard output, or standard error when there is none) must match the transcript in shape — the same lines, with every number, path and
 //! run of spaces left free. A line `…` in a transcript stands for any number of lines.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

@@ -1,6 +1,6 @@
 //! End-to-end tests of `flarebench render` and `flarebench precompute`.
 
-mod common;
+use crate::common;
 
 use common::{flarebench, json, temp_dir};
 

@@ -1,7 +1,7 @@
 //! `flarebench stability`: the quick suite passes on the lenses CI checks, every kind of check
 //! is there, and the command's exit code and JSON say what the findings say.
 
-mod common;
+use crate::common;
 
 use common::{flarebench, temp_dir};
 use flarebench::lens_library;

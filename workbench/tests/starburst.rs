@@ -1,7 +1,7 @@
 //! End-to-end tests of the starburst in `flarebench render`, `--background`, half-float EXR,
 //! and `flarebench apply` on synthetic images with lights at known places.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

@@ -1,6 +1,6 @@
 //! `flarebench sweep`: the files it writes, what they hold, and resuming from its cache.
 
-mod common;
+use crate::common;
 
 use common::{flarebench, temp_dir};
 use serde_json::Value;

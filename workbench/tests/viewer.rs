@@ -23,7 +23,7 @@ use flarebench_sdk::LensSystem;
 use flarebench_sdk::io::read_lens;
 use ghost_raytrace::scene::{LightSpec, Quality};
 
-mod offscreen_viewer;
+use crate::offscreen_viewer;
 use offscreen_viewer::{SETTLE, key, settled};
 
 const WINDOW: (u32, u32) = (1200, 640);

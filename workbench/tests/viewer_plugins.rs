@@ -27,7 +27,7 @@ use flarebench_sdk::image::HdrImage;
 use flarebench_test_support::{load_lens, plugin_library};
 use ghost_raytrace::scene::{LightSpec, Quality};
 
-mod offscreen_viewer;
+use crate::offscreen_viewer;
 use offscreen_viewer::{key, settled};
 
 const WINDOW: (u32, u32) = (1200, 640);

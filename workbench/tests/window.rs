@@ -7,7 +7,7 @@
 //! Needs Xvfb, xdotool and xwd (Debian: xvfb xdotool x11-apps); skipped with a message when
 //! they are missing locally, a failure under CI (`CI` set), where `.ci/run` installs them.
 
-mod common;
+use crate::common;
 
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};

@@ -51,11 +51,10 @@ impl GpuContext {
     /// Opens the best adapter `choice` allows. The environment variable `WGPU_BACKEND`
     /// (`vulkan`, `metal`, `dx12`) narrows the search, as in every wgpu program.
     pub fn new(choice: AdapterChoice) -> Result<GpuContext, GpuError> {
-        let desc = wgpu::InstanceDescriptor::new_without_display_handle().with_env();
         let backends = std::env::var("WGPU_BACKEND")
             .map(|b| format!(" (WGPU_BACKEND={b})"))
             .unwrap_or_default();
-        let instance = wgpu::Instance::new(desc);
+        let instance = headless_instance();
         let adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()));
         let rank = |a: &wgpu::Adapter| match a.get_info().device_type {
             wgpu::DeviceType::DiscreteGpu => 0,
@@ -169,6 +168,70 @@ impl GpuContext {
             })?;
         self.check()
     }
+}
+
+/// A wgpu instance for drawing off screen: it never presents to a window, so it asks the
+/// Vulkan driver for no window-system surface extension.
+///
+/// With the Xlib, XCB or Wayland surface extension enabled, Mesa's device-selection layer
+/// (`VK_LAYER_MESA_device_select`, installed with Mesa's Vulkan drivers) connects to the Wayland
+/// compositor and the X server to find their default GPU whenever the adapters are listed:
+/// without `XDG_RUNTIME_DIR` libwayland prints `error: XDG_RUNTIME_DIR is invalid or not set in
+/// the environment.` on standard error, twice, and the probe takes time. Without those
+/// extensions the layer only orders the devices, silently; the ranking in [`GpuContext::new`]
+/// chooses among them anyway.
+///
+/// Elsewhere (macOS, Windows), or when `WGPU_BACKEND` leaves Vulkan out, this is wgpu's own
+/// instance without a display handle.
+pub fn headless_instance() -> wgpu::Instance {
+    let desc = wgpu::InstanceDescriptor::new_without_display_handle().with_env();
+    #[cfg(all(unix, not(target_os = "macos"), not(target_os = "android")))]
+    if desc.backends.contains(wgpu::Backends::VULKAN) {
+        // Vulkan is the only backend wgpu is built with here (`Cargo.toml`: no GL).
+        if let Some(instance) = headless_vulkan(&desc) {
+            return instance;
+        }
+    }
+    wgpu::Instance::new(desc)
+}
+
+/// The window-system surface extensions [`headless_instance`] leaves out.
+#[cfg(all(unix, not(target_os = "macos"), not(target_os = "android")))]
+const WINDOW_SYSTEM_EXTENSIONS: [&std::ffi::CStr; 3] = [
+    c"VK_KHR_xlib_surface",
+    c"VK_KHR_xcb_surface",
+    c"VK_KHR_wayland_surface",
+];
+
+/// A Vulkan-only wgpu instance without [`WINDOW_SYSTEM_EXTENSIONS`], or `None` when Vulkan
+/// cannot be loaded (then wgpu's own instance finds no Vulkan adapter either and says so).
+#[cfg(all(unix, not(target_os = "macos"), not(target_os = "android")))]
+fn headless_vulkan(desc: &wgpu::InstanceDescriptor) -> Option<wgpu::Instance> {
+    let hal_desc = wgpu::hal::InstanceDescriptor {
+        name: "flarebench",
+        flags: desc.flags,
+        memory_budget_thresholds: desc.memory_budget_thresholds,
+        backend_options: desc.backend_options.clone(),
+        telemetry: None,
+        display: None,
+    };
+    let drop_window_systems: Box<wgpu::hal::vulkan::CreateInstanceCallback> = Box::new(|args| {
+        args.extensions
+            .retain(|e| !WINDOW_SYSTEM_EXTENSIONS.contains(e));
+    });
+    // SAFETY: wgpu-hal asks callbacks not to remove extensions because it assumes an available
+    // extension is enabled. The three window-system ones are the exception: wgpu-hal consults
+    // them only to create a surface from an Xlib, XCB or Wayland window, and checks first that
+    // the instance's extension list (the list after this callback) holds them, returning an
+    // error otherwise. Nothing here creates a surface. `VK_KHR_surface`, which the swapchain
+    // device extension depends on, stays.
+    let hal = unsafe {
+        wgpu::hal::vulkan::Instance::init_with_callback(&hal_desc, Some(drop_window_systems))
+    }
+    .ok()?;
+    // SAFETY: `hal` is a Vulkan instance wgpu-hal itself made, valid and not shared; wgpu
+    // takes it over.
+    Some(unsafe { wgpu::Instance::from_hal::<wgpu::hal::api::Vulkan>(hal) })
 }
 
 fn driver_text(info: &wgpu::AdapterInfo) -> String {

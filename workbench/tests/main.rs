@@ -1,0 +1,63 @@
+//! The workbench's integration tests, one test binary (`cargo test -p flarebench --test
+//! workbench`): each file of this directory is a module. One binary links wgpu, egui and winit
+//! once instead of once per file.
+//!
+//! Run one file's tests by its module path: `cargo test -p flarebench --test workbench render::`.
+
+mod common;
+#[cfg(feature = "window")]
+mod offscreen_viewer;
+
+mod cli;
+mod convert;
+#[cfg(feature = "tui")]
+mod edit_app;
+#[cfg(feature = "tui")]
+mod edit_cells;
+mod edit_document;
+#[cfg(feature = "tui")]
+mod edit_robustness;
+#[cfg(feature = "tui")]
+mod edit_tmux;
+mod golden;
+mod gpu;
+mod lens_drawing;
+mod plugin_loop;
+mod plugins;
+mod readme;
+mod render;
+mod stability;
+mod starburst;
+mod sweep;
+#[cfg(feature = "window")]
+mod viewer;
+#[cfg(feature = "window")]
+mod viewer_plugins;
+#[cfg(feature = "window")]
+mod window;
+
+/// Every test file of this directory is a module above (the package sets `autotests = false`,
+/// so a file left out would never be compiled).
+#[test]
+fn every_test_file_is_a_module_of_this_binary() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests");
+    let main = std::fs::read_to_string(dir.join("main.rs")).unwrap();
+    let mut files = 0;
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        let stem = path.file_stem().unwrap().to_str().unwrap().to_string();
+        let is_module = if path.is_dir() {
+            path.join("mod.rs").is_file()
+        } else {
+            path.extension().is_some_and(|e| e == "rs") && stem != "main"
+        };
+        if is_module {
+            files += 1;
+            assert!(
+                main.contains(&format!("\nmod {stem};\n")),
+                "tests/{stem} is not a module of tests/main.rs"
+            );
+        }
+    }
+    assert!(files > 20, "{files} test files");
+}
