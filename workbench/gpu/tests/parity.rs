@@ -13,7 +13,7 @@ use flarebench_sdk::image::HdrImage;
 use flarebench_sdk::starburst::StarburstSplat;
 use flarebench_test_support::load_lens;
 use ghost_raytrace::ghosts::{self, RenderOptions};
-use ghost_raytrace::plan::{self, PlanOptions};
+use ghost_raytrace::plan::{self, DrawMethod, PlanOptions};
 use ghost_raytrace::scene::{LightSpec, Quality};
 
 /// Relative RMSE of the GPU image against the CPU image.
@@ -100,6 +100,34 @@ fn heliar_circle_fringed_and_band_by_band() {
     check("heliar circle, fringed", &r);
     let r = record("heliar-tronnier", &["8,60"], &Aperture::Circular, true);
     check("heliar circle, band by band", &r);
+}
+
+/// The Nikon zoom's frame with every ghost splatted (`plan::DrawMethod::Splat`): its
+/// near-focus ghosts' sub-pixel triangles as box splats, which the GPU draws as pairs of
+/// triangles.
+#[test]
+fn nikon_splatted() {
+    let sys = load_lens("nikon-zoom-short");
+    let frame = Frame::across_film(480, 270, sys.film_width_mm);
+    let lights = [LightSpec::parse("10,30").unwrap()];
+    let opts = PlanOptions {
+        method: Some(DrawMethod::Splat),
+        ..PlanOptions::for_quality(Quality::Default, None)
+    };
+    let plans = plan::plan(&sys, &lights, &frame, &opts).unwrap();
+    let mut recorded = FrameMeshes::default();
+    ghosts::draw_into(
+        &sys,
+        &Aperture::Circular,
+        frame,
+        &plans,
+        RenderOptions::default(),
+        &mut recorded,
+    )
+    .unwrap();
+    let boxes: usize = recorded.meshes.iter().map(|(_, m)| m.boxes.len()).sum();
+    assert!(boxes > 10_000, "{boxes} boxes");
+    check("nikon splatted", &recorded);
 }
 
 fn iris() -> Aperture {
