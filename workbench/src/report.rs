@@ -8,7 +8,9 @@ use crate::flare::compose::StarburstLine;
 use flarebench_sdk::ghost::ReflectionOrder;
 use flarebench_sdk::ghost::context::GhostStats;
 use flarebench_sdk::image::HdrImage;
-use ghost_raytrace::plan::{DropReason, FourReflectionSummary, LightPlan};
+use ghost_raytrace::plan::{
+    DrawMethod, DropReason, FourReflectionSummary, LightPlan, MethodPrediction,
+};
 
 /// Time spent per stage (milliseconds).
 #[derive(Clone, Debug, Default, Serialize)]
@@ -57,6 +59,11 @@ pub struct GhostLine {
     pub energy_share: f64,
     pub rays: usize,
     pub triangles: usize,
+    /// How the ghost was drawn, and what the plan predicted of each way (its time meshed and
+    /// splatted, the error splatting adds to the ghost and its share of the frame's squared
+    /// relative RMSE: `ghost_raytrace::method`).
+    pub method: DrawMethod,
+    pub prediction: MethodPrediction,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -135,6 +142,8 @@ impl LightReport {
                 energy_share: g.energy_share,
                 rays: s.rays,
                 triangles: s.triangles,
+                method: g.method,
+                prediction: g.prediction,
             })
             .collect();
         ghosts.sort_by(|a, b| b.energy_share.total_cmp(&a.energy_share));
@@ -220,15 +229,33 @@ impl RenderReport {
                     l.bounds_not_in_table.join(" ")
                 );
             }
+            let splatted: Vec<&GhostLine> = l
+                .ghosts
+                .iter()
+                .filter(|g| g.method == DrawMethod::Splat)
+                .collect();
+            if !splatted.is_empty() {
+                let added2: f64 = splatted.iter().map(|g| g.prediction.frame_error2).sum();
+                s += &format!(
+                    "  {} ghosts splatted (sub-pixel triangles as boxes), predicted to add {:.3}% relative RMSE\n",
+                    splatted.len(),
+                    100.0 * added2.sqrt()
+                );
+            }
             for g in l.ghosts.iter().take(5) {
                 s += &format!(
-                    "  ghost {:>6}: energy {:.3e}, grid {}², {} band{}, drawn at 1/{}\n",
+                    "  ghost {:>6}: energy {:.3e}, grid {}², {} band{}, drawn at 1/{}{}\n",
                     g.ghost,
                     g.energy_share,
                     g.grid,
                     g.bands,
                     if g.bands == 1 { "" } else { "s" },
-                    g.downscale
+                    g.downscale,
+                    if g.method == DrawMethod::Splat {
+                        ", splatted"
+                    } else {
+                        ""
+                    }
                 );
             }
         }

@@ -73,6 +73,59 @@ fn render_writes_an_image_and_reports_what_it_did() {
     assert!(v["error"].is_null());
 }
 
+/// The fast preset splats the Nikon zoom's near-focus ghosts on a small frame (their
+/// triangles land under a quarter pixel), and the report says which ghosts it splatted and
+/// what the plan predicted, in JSON and in text.
+#[test]
+fn the_report_gives_each_ghost_s_drawing_method_and_prediction() {
+    let tmp = temp_dir("methods");
+    let out = tmp.path().join("nikon.exr");
+    let args = [
+        "render",
+        "nikon-zoom-short",
+        "--light",
+        "10,30",
+        "--size",
+        "320x180",
+        "--quality",
+        "fast",
+        "--starburst",
+        "off",
+        "-o",
+        out.to_str().unwrap(),
+    ];
+    let v = json(&[&args[..], &["--json"]].concat());
+    let ghosts = v["lights"][0]["ghosts"].as_array().unwrap();
+    let splatted: Vec<&Value> = ghosts.iter().filter(|g| g["method"] == "splat").collect();
+    assert!(!splatted.is_empty(), "no ghost splatted");
+    assert!(splatted.len() < ghosts.len(), "every ghost splatted");
+    for g in &splatted {
+        let p = &g["prediction"];
+        assert!(p["triangle_px"].as_f64().unwrap() < 0.25, "{g}");
+        assert!(
+            p["splat_ns"].as_f64().unwrap() < p["mesh_ns"].as_f64().unwrap(),
+            "{g}"
+        );
+        assert!(p["frame_error2"].as_f64().unwrap() > 0.0, "{g}");
+    }
+    let added: f64 = splatted
+        .iter()
+        .map(|g| g["prediction"]["frame_error2"].as_f64().unwrap())
+        .sum::<f64>()
+        .sqrt();
+    assert!(
+        added <= 0.03,
+        "predicted {added} over the fast preset's budget"
+    );
+    let text = flarebench(&[&args[..], &["--report"]].concat());
+    let report =
+        String::from_utf8_lossy(&text.stderr).to_string() + &String::from_utf8_lossy(&text.stdout);
+    assert!(
+        report.contains(&format!("{} ghosts splatted", splatted.len())),
+        "{report}"
+    );
+}
+
 #[test]
 fn reference_error_is_reported_and_small() {
     let tmp = temp_dir("render-ref");

@@ -53,7 +53,7 @@ pub fn splat_triangle<const N: usize>(
     shade: impl Fn(&[f32; N]) -> [f32; 3],
     boxes: &mut Boxes,
 ) {
-    if !(area > 0.0) {
+    if area.is_nan() || area <= 0.0 {
         return;
     }
     let spread = |c: usize| {
