@@ -272,9 +272,14 @@ fn edit_with_a_window_but_no_display_runs_the_editor_with_a_note() {
         assert!(std::env::var_os("CI").is_none(), "tmux missing under CI");
         return;
     }
+    // A copy: an edit writes the recovery file beside the lens, and other tests open the
+    // bundled one at the same time.
+    let tmp = common::temp_dir("edit-nodisplay");
+    let path = heliar_copy(tmp.path());
     let command = format!(
-        "env -u DISPLAY -u WAYLAND_DISPLAY '{}' edit --window heliar-tronnier",
-        env!("CARGO_BIN_EXE_flarebench")
+        "env -u DISPLAY -u WAYLAND_DISPLAY '{}' edit --window '{}'",
+        env!("CARGO_BIN_EXE_flarebench"),
+        path.display()
     );
     let tmux = session("nodisplay", 160, &command);
     tmux.wait_for("no window: cannot open a window");
