@@ -1,11 +1,11 @@
 //! How each ghost is drawn: the per-ghost cost and error model, and the choice.
 //!
 //! Two ways to draw a traced ghost ([`DrawMethod`]): **mesh** — its triangles rasterized, the
-//! small ones with exact coverage — and **splat** — band by band, its small triangles cut
-//! into pieces of about a pixel, each added as a box (`flarebench_sdk::ghost::splat`). Both
-//! carry exactly the ghost's flux; splatting moves light by up to about half a piece within
-//! each triangle and samples an edge's feather once per piece, and costs a few multiply-adds
-//! a piece where exact coverage clips polygons against every pixel a triangle touches.
+//! small ones with exact coverage — and **splat** — band by band, its triangles under a
+//! quarter pixel each added as one box of its area (`flarebench_sdk::ghost::splat`). Both
+//! carry exactly the ghost's flux; splatting shares a triangle's light between the pixels it
+//! straddles by its box rather than its shape, and costs a few multiply-adds a triangle where
+//! exact coverage clips polygons against every pixel a triangle touches.
 //!
 //! For every ghost the plan predicts ([`MethodPrediction`]) each method's time from the
 //! ghost's triangle count and mean triangle area on its drawn frame, and the error splatting
@@ -26,8 +26,8 @@ pub enum DrawMethod {
     /// coverage; a dispersive ghost's bands in fringed groups where that pays.
     #[default]
     Mesh,
-    /// Splatted: band by band, its triangles that exact coverage would draw cut into pieces of
-    /// about a pixel, each added as a box (`flarebench_sdk::ghost::splat`).
+    /// Splatted: band by band, its triangles under a quarter pixel each added as one box of
+    /// its area (`flarebench_sdk::ghost::splat`).
     Splat,
 }
 

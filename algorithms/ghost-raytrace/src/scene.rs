@@ -240,9 +240,8 @@ impl Quality {
     /// The relative RMSE the plan's choice of drawing methods may add to a frame, in
     /// quadrature with the rest of its error (`crate::method::choose`). The fast preset
     /// splats its near-focus ghosts within 3%; the default and high presets mesh every ghost:
-    /// their frames are within 2% of the reference meshed, and splatting, measured on the Nikon
-    /// zoom's default frame (1920 × 1080, light 10°, 30°), saved about an eighth of its time
-    /// for 0.4% added error (docs/performance.md).
+    /// their frames are within 2% of the reference meshed, with little of the budget to spend
+    /// (docs/performance.md, § Why the frame costs what it does).
     pub fn method_error_budget(self) -> f64 {
         match self {
             Quality::Fast => 3e-2,

@@ -13,7 +13,7 @@
 //!   intensities, the diffraction-limit caustic bound, the feathered edge's width.
 //! - [`mesh`]: ghost triangles ready to rasterize (open, edge and fringed meshes, box
 //!   splats).
-//! - [`splat`]: a splatted ghost's small triangles cut into pieces drawn as boxes, where
+//! - [`splat`]: a splatted ghost's sub-pixel triangles drawn as boxes, where
 //!   exact coverage would cost most of its time.
 //! - `row_split`: where along a rasterized row a shade is zero or open, shared by the
 //!   shaders.

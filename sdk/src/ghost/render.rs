@@ -186,7 +186,7 @@ pub fn rasterize_ghost_mesh_with(
 
 /// The shade of an edge triangle's point with attributes `a` ([`EdgeAttrs`]): its irradiance
 /// times the clip radius's feathered step and, where flagged, `aperture(u, v, feather)` (the
-/// aperture's soft transmission). The rasterizer's per pixel, a splat's per piece
+/// aperture's soft transmission). The rasterizer's per pixel, a splat's per box
 /// ([`super::splat`]).
 #[inline]
 pub(crate) fn edge_shade(a: &EdgeAttrs, aperture: &impl Fn(f32, f32, f32) -> f32) -> [f32; 3] {
