@@ -41,23 +41,6 @@ mod window;
 #[test]
 fn every_test_file_is_a_module_of_this_binary() {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests");
-    let main = std::fs::read_to_string(dir.join("main.rs")).unwrap();
-    let mut files = 0;
-    for entry in std::fs::read_dir(&dir).unwrap() {
-        let path = entry.unwrap().path();
-        let stem = path.file_stem().unwrap().to_str().unwrap().to_string();
-        let is_module = if path.is_dir() {
-            path.join("mod.rs").is_file()
-        } else {
-            path.extension().is_some_and(|e| e == "rs") && stem != "main"
-        };
-        if is_module {
-            files += 1;
-            assert!(
-                main.contains(&format!("\nmod {stem};\n")),
-                "tests/{stem} is not a module of tests/main.rs"
-            );
-        }
-    }
+    let files = flarebench_test_support::assert_every_test_file_is_a_module(&dir, &[]);
     assert!(files > 20, "{files} test files");
 }

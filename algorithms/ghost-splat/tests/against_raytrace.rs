@@ -2,7 +2,7 @@
 //! every ghost kept, loaded from the library `cargo build --workspace` builds): the same
 //! energy within the splat's statistical error, and an image error that falls as 1/√rays.
 
-mod common;
+use super::common;
 
 use common::{Values, heliar_scene, render};
 use flarebench_sdk::LensSystem;

@@ -2,7 +2,7 @@
 //! bad parameters as errors (called directly and through the built library), and the loaded
 //! library rendering what the direct call renders.
 
-mod common;
+use super::common;
 
 use common::{Values, heliar_scene, render};
 use flarebench_sdk::abi::host;

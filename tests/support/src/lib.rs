@@ -82,3 +82,35 @@ pub fn plate() -> LensSystem {
     sys.film_height_mm = 20.0;
     sys
 }
+
+/// Checks that every test file of the directory `tests` (a `.rs` file, or a folder with a
+/// `mod.rs`) but those named in `own_binaries` (test targets of their own in the package's
+/// `Cargo.toml`) is a module of its `main.rs`: a package with `autotests = false` and one test
+/// binary would never compile a file left out. Panics naming the first file that is not;
+/// returns how many are.
+pub fn assert_every_test_file_is_a_module(tests: &Path, own_binaries: &[&str]) -> usize {
+    let main = std::fs::read_to_string(tests.join("main.rs"))
+        .unwrap_or_else(|e| panic!("{}: {e}", tests.join("main.rs").display()));
+    let mut files = 0;
+    for entry in std::fs::read_dir(tests).expect("the tests directory is readable") {
+        let path = entry.expect("a directory entry").path();
+        let Some(stem) = path.file_stem().and_then(|s| s.to_str()) else {
+            continue;
+        };
+        let is_module = if path.is_dir() {
+            path.join("mod.rs").is_file()
+        } else {
+            path.extension().is_some_and(|e| e == "rs") && stem != "main"
+        };
+        if is_module && !own_binaries.contains(&stem) {
+            files += 1;
+            assert!(
+                main.contains(&format!("\nmod {stem};\n")),
+                "{} is not a module of {}",
+                path.display(),
+                tests.join("main.rs").display()
+            );
+        }
+    }
+    files
+}
