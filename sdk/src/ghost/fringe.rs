@@ -55,7 +55,7 @@ use super::mesh::GhostMesh;
 use super::row_split::{
     SPLIT_MARGIN, StepNorm, intersect, linear_split_with, parabola_below_with, smoothstep,
 };
-use super::triangles::{BandTriangles, grid_triangles, trace_band};
+use super::triangles::{BandTriangles, grid_triangles, len, trace_band};
 
 /// Attributes of a fringed triangle's corner: summed RGB irradiance, the clip radius at
 /// `τ = 0` and its change over `τ ∈ [0, 1]`, likewise the stop crossing's `u` and `v`, the
@@ -585,7 +585,7 @@ impl FringeShader<'_> {
             f64::from(a[7]) + 0.5 * f64::from(a[8]),
         );
         let [dmu, dmv] = rows.middle_step;
-        let step = dmu.hypot(dmv);
+        let step = len(dmu, dmv);
         let margin = rows.reach + APERTURE_SPLIT_MARGIN;
         // How many pixels from `k` on (either way) have the transmission `want` all along
         // their segments: 0 when `k` has not.
@@ -942,7 +942,7 @@ impl<'e, 'a> Fringer<'e, 'a> {
                 .fold([0.0; 2], |c, p| [c[0] + p[0] / 6.0, c[1] + p[1] / 6.0]);
             let radius = ends
                 .iter()
-                .map(|p| (p[0] - c[0]).hypot(p[1] - c[1]))
+                .map(|p| len(p[0] - c[0], p[1] - c[1]))
                 .fold(0.0_f64, f64::max);
             let uniform =
                 self.sampler

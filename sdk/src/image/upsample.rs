@@ -281,9 +281,12 @@ struct Level<'a> {
 
 /// Makes the output rows `rows` (whole rows of `width` pixels, the first one row `y0` of the
 /// frame) from `levels`, with `cache` (two full-width rows per level, holding none) and, when
-/// replacing, `made` (a row's floats). Compiled for AVX2 too, chosen at run time: the
+/// replacing, `made` (a row's floats). Compiled for AVX2 and AVX-512 too, chosen at run time: the
 /// interpolation is plain f32 arithmetic (no fused multiply–adds), the same bits either way.
-#[multiversion::multiversion(targets("x86_64+avx2+fma"))]
+#[multiversion::multiversion(targets(
+    "x86_64+avx512f+avx512bw+avx512cd+avx512dq+avx512vl+avx2+fma",
+    "x86_64+avx2+fma"
+))]
 fn make_block(
     levels: &[Level<'_>],
     width: usize,

@@ -213,7 +213,10 @@ pub struct Probe<T> {
 }
 
 /// [`trace_packet_dispatch`] with probes (see [`Sequence::trace_batch_probed`]).
-#[multiversion::multiversion(targets("x86_64+avx2+fma"))]
+#[multiversion::multiversion(targets(
+    "x86_64+avx512f+avx512bw+avx512cd+avx512dq+avx512vl+avx2+fma",
+    "x86_64+avx2+fma"
+))]
 fn trace_packet_probed_dispatch<T: Real>(
     steps: &[Step<T>],
     tables: &[InterfaceTable<T>],
@@ -281,9 +284,13 @@ fn step_packet_probed<T: Real, const MODE: u8, const SHAPE: u8>(
     }
 }
 
-/// The packet kernel, compiled for the baseline CPU and for AVX2 + FMA, chosen at run time.
+/// The packet kernel, compiled for the baseline CPU, for AVX2 + FMA and for AVX-512
+/// (x86-64-v4), chosen at run time.
 /// (Products and sums are not contracted into FMAs, so every version gives the same bits.)
-#[multiversion::multiversion(targets("x86_64+avx2+fma"))]
+#[multiversion::multiversion(targets(
+    "x86_64+avx512f+avx512bw+avx512cd+avx512dq+avx512vl+avx2+fma",
+    "x86_64+avx2+fma"
+))]
 fn trace_packet_dispatch<T: Real>(
     steps: &[Step<T>],
     tables: &[InterfaceTable<T>],
