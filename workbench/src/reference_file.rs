@@ -4,6 +4,14 @@
 //! ([`ghost_raytrace::reference::reference_key`]: renderer version, lens fingerprint,
 //! aperture, frame, lights) as the text attribute [`KEY_ATTRIBUTE`]; a file made for another
 //! scene is refused, never silently used.
+//!
+//! Without a file, a reference is kept in the cache directory ([`cache_dir`]: by default
+//! `$XDG_CACHE_HOME/flarebench/references`, or `~/.cache/…`; [`CACHE_ENV`] names another, or,
+//! set empty, turns it off), one file per scene named by the FNV-1a hash of its key, and read
+//! back while the scene stays the same: the second `render --reference` or `compare` of a
+//! scene does not render the reference again. A cached file that cannot be read or holds
+//! another key is rendered over; a cache that cannot be written is passed over with a
+//! warning.
 
 use std::path::{Path, PathBuf};
 
@@ -12,6 +20,7 @@ use flarebench_sdk::LensSystem;
 use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::frame::Frame;
 use flarebench_sdk::ghost::ReflectionOrder;
+use flarebench_sdk::hash::fnv1a_hex;
 use flarebench_sdk::image::HdrImage;
 use flarebench_sdk::io::write_atomically;
 use ghost_raytrace::reference::{reference_image_of_order, reference_key};
@@ -22,6 +31,46 @@ use crate::output::{encode_exr_with, read_exr_with_attributes};
 /// The EXR text attribute holding the scene's key.
 pub const KEY_ATTRIBUTE: &str = "flarebench-reference-key";
 
+/// The environment variable naming the reference cache's directory (empty: no cache).
+pub const CACHE_ENV: &str = "FLAREBENCH_REFERENCE_CACHE";
+
+/// The reference cache's directory: [`CACHE_ENV`] if set (`None` when empty), else
+/// `$XDG_CACHE_HOME/flarebench/references`, else `$HOME/.cache/flarebench/references`.
+pub fn cache_dir() -> Option<PathBuf> {
+    if let Some(d) = std::env::var_os(CACHE_ENV) {
+        return (!d.is_empty()).then(|| PathBuf::from(d));
+    }
+    let base = std::env::var_os("XDG_CACHE_HOME")
+        .filter(|d| !d.is_empty())
+        .map(PathBuf::from)
+        .or_else(|| std::env::var_os("HOME").map(|h| Path::new(&h).join(".cache")))?;
+    Some(base.join("flarebench").join("references"))
+}
+
+/// The cache's file for the scene of `key`, when there is a cache.
+fn cache_file(key: &str) -> Option<PathBuf> {
+    cache_dir().map(|d| d.join(format!("{}.exr", fnv1a_hex(key.as_bytes()))))
+}
+
+/// True when the cache holds a file for this scene (whether it is still good is checked when
+/// it is read): callers say "rendering the reference" only when it is not.
+pub fn in_cache(
+    system: &LensSystem,
+    aperture: &Aperture,
+    frame: Frame,
+    lights: &[LightSpec],
+    reflections: ReflectionOrder,
+) -> bool {
+    cache_file(&reference_key(
+        system,
+        aperture,
+        &frame,
+        lights,
+        reflections,
+    ))
+    .is_some_and(|p| p.is_file())
+}
+
 /// Where a reference image came from.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum ReferenceSource {
@@ -31,6 +80,10 @@ pub enum ReferenceSource {
     Saved(PathBuf),
     /// Read from this file, made earlier for the same scene.
     Read(PathBuf),
+    /// Read from this file of the cache ([`cache_dir`]).
+    Cached(PathBuf),
+    /// Rendered now and kept in this file of the cache.
+    CachedNow(PathBuf),
 }
 
 impl std::fmt::Display for ReferenceSource {
@@ -39,6 +92,8 @@ impl std::fmt::Display for ReferenceSource {
             ReferenceSource::Rendered => write!(f, "rendered"),
             ReferenceSource::Saved(p) => write!(f, "rendered and saved to {}", p.display()),
             ReferenceSource::Read(p) => write!(f, "read from {}", p.display()),
+            ReferenceSource::Cached(p) => write!(f, "read from the cache ({})", p.display()),
+            ReferenceSource::CachedNow(p) => write!(f, "rendered and cached ({})", p.display()),
         }
     }
 }
@@ -82,9 +137,38 @@ pub fn reference_for(
         }
         return Ok((img, ReferenceSource::Read(path.to_path_buf())));
     }
+    let cached = match file {
+        Some(_) => None,
+        None => cache_file(&key),
+    };
+    if let Some(path) = &cached
+        && let Ok((img, text)) = read_exr_with_attributes(path)
+        && text.get(KEY_ATTRIBUTE) == Some(&key)
+        && (img.width, img.height) == (frame.width, frame.height)
+    {
+        return Ok((img, ReferenceSource::Cached(path.clone())));
+    }
     let img = reference_image_of_order(system, aperture, frame, lights, reflections)?;
     let Some(path) = file else {
-        return Ok((img, ReferenceSource::Rendered));
+        let Some(path) = cached else {
+            return Ok((img, ReferenceSource::Rendered));
+        };
+        let kept = encode_exr_with(&img, &[(KEY_ATTRIBUTE, &key)]).and_then(|bytes| {
+            if let Some(dir) = path.parent() {
+                std::fs::create_dir_all(dir)?;
+            }
+            Ok(write_atomically(&path, &bytes)?)
+        });
+        return Ok(match kept {
+            Ok(()) => (img, ReferenceSource::CachedNow(path)),
+            Err(e) => {
+                eprintln!(
+                    "warning: could not keep the reference in the cache `{}` ({e:#}); set {CACHE_ENV} to another directory, or empty to turn the cache off",
+                    path.display()
+                );
+                (img, ReferenceSource::Rendered)
+            }
+        });
     };
     let bytes = encode_exr_with(&img, &[(KEY_ATTRIBUTE, &key)])?;
     write_atomically(path, &bytes)

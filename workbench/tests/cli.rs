@@ -199,8 +199,8 @@ fn out_of_range_arguments_are_refused() {
 #[test]
 fn a_closed_pipe_ends_output_quietly() {
     use std::io::Read;
-    use std::process::{Command, Stdio};
-    let mut child = Command::new(env!("CARGO_BIN_EXE_flarebench"))
+    use std::process::Stdio;
+    let mut child = common::command()
         .args(["info", "nikon-zoom-short"])
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())

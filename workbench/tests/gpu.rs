@@ -139,7 +139,7 @@ fn without_an_adapter_gpu_says_what_to_install_and_auto_uses_the_cpu() {
         if json {
             a.push("--json");
         }
-        std::process::Command::new(env!("CARGO_BIN_EXE_flarebench"))
+        common::command()
             .args(&a)
             .env("WGPU_BACKEND", other)
             .output()
@@ -179,7 +179,7 @@ fn auto_finds_its_backend_silently_without_a_runtime_directory() {
     let tmp = temp_dir("gpu-auto-quiet");
     let out = tmp.path().join("x.exr");
     let run = |quiet: &str| {
-        std::process::Command::new(env!("CARGO_BIN_EXE_flarebench"))
+        common::command()
             .args([
                 "render",
                 "heliar-tronnier",

@@ -213,7 +213,7 @@ struct Watcher {
 
 impl Watcher {
     fn start(args: &[&str], stderr: PathBuf) -> Watcher {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_flarebench"))
+        let mut child = common::command()
             .args(args)
             .stdout(Stdio::piped())
             .stderr(std::fs::File::create(&stderr).unwrap())

@@ -16,7 +16,7 @@ fn beside_binary(lib: &str) -> PathBuf {
 
 /// Runs `flarebench` with `args`, test plugins discovered.
 fn with_test_plugins(args: &[&str]) -> std::process::Output {
-    std::process::Command::new(env!("CARGO_BIN_EXE_flarebench"))
+    common::command()
         .args(args)
         .env("FLAREBENCH_TEST_PLUGINS", "1")
         .output()
@@ -87,7 +87,7 @@ fn a_broken_library_on_the_plugin_path_is_listed_with_the_reason() {
     let dir = tmp.path();
     let bad = dir.join(library_file_name("not_a_plugin"));
     std::fs::write(&bad, "not a shared library").unwrap();
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_flarebench"))
+    let out = common::command()
         .args(["plugins", "list"])
         .env("FLAREBENCH_PLUGIN_PATH", dir)
         .output()

@@ -6,7 +6,6 @@
 use crate::common;
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use common::temp_dir;
 use flarebench::output::{ToneMap, save_image};
@@ -171,7 +170,7 @@ fn the_transcripts_of_the_readme_and_docs_match_the_binary_in_shape() {
                 {
                     continue;
                 }
-                let out = Command::new(env!("CARGO_BIN_EXE_flarebench"))
+                let out = common::command()
                     .args(&t.args[1..])
                     .current_dir(tmp.path())
                     .output()

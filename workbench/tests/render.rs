@@ -825,3 +825,70 @@ fn band_by_band_and_fringed_bands_give_the_same_light() {
         );
     }
 }
+
+/// Without `--reference-file`, a scene's reference is kept in the cache directory and read back
+/// while the scene stays the same: the same figures, "read from the cache"; a damaged file is
+/// rendered over; `FLAREBENCH_REFERENCE_CACHE` set empty keeps nothing.
+#[test]
+fn the_reference_is_cached_per_scene_and_a_damaged_file_rendered_over() {
+    let tmp = temp_dir("reference-cache");
+    let dir = tmp.path();
+    // The plate (a stop and a plane-parallel plate): its reference takes moments.
+    let lens = dir.join("plate.xml");
+    flarebench_sdk::io::save_xml(&flarebench_test_support::plate(), &lens).unwrap();
+    let cache = dir.join("cache");
+    let run = |cache: &std::path::Path, json: bool| {
+        let mut c = common::command();
+        c.args([
+            "render",
+            lens.to_str().unwrap(),
+            "--light",
+            "2,0",
+            "--size",
+            "64x64",
+            "--reference",
+            "-o",
+            dir.join("out.exr").to_str().unwrap(),
+        ])
+        .env("FLAREBENCH_REFERENCE_CACHE", cache)
+        .env("XDG_CACHE_HOME", dir.join("xdg"));
+        c.arg(if json { "--json" } else { "--report" });
+        let out = c.output().unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        out
+    };
+    let files = |d: &std::path::Path| -> Vec<std::path::PathBuf> {
+        std::fs::read_dir(d)
+            .map(|r| r.map(|e| e.unwrap().path()).collect())
+            .unwrap_or_default()
+    };
+    let first: Value = serde_json::from_slice(&run(&cache, true).stdout).unwrap();
+    let kept = files(&cache);
+    assert_eq!(kept.len(), 1, "{kept:?}");
+    assert!(kept[0].extension().is_some_and(|e| e == "exr"));
+    let bytes = std::fs::read(&kept[0]).unwrap();
+
+    let again = run(&cache, false);
+    let err = String::from_utf8_lossy(&again.stderr);
+    assert!(err.contains("reference read from the cache"), "{err}");
+    let second: Value = serde_json::from_slice(&run(&cache, true).stdout).unwrap();
+    assert_eq!(first["error"], second["error"]);
+    assert!(
+        first["error"]["relative_rmse"].as_f64().is_some(),
+        "{first}"
+    );
+
+    std::fs::write(&kept[0], b"not an image").unwrap();
+    let redone = run(&cache, false);
+    let err = String::from_utf8_lossy(&redone.stderr);
+    assert!(err.contains("reference rendered and cached"), "{err}");
+    assert_eq!(std::fs::read(&kept[0]).unwrap(), bytes);
+
+    let _ = run(std::path::Path::new(""), true);
+    assert!(files(&dir.join("xdg")).is_empty());
+    assert_eq!(files(&cache).len(), 1);
+}

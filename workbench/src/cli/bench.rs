@@ -10,12 +10,12 @@
 
 use std::time::Instant;
 
+use crate::reference_file::{in_cache, reference_for};
 use clap::Args;
 use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::ghost::ReflectionOrder;
 use ghost_raytrace::ghosts::RenderOptions;
 use ghost_raytrace::plan::{LensTables, PlanOptions};
-use ghost_raytrace::reference::reference_image_of_order;
 use ghost_raytrace::scene::{LightSpec, Quality};
 use serde::Serialize;
 
@@ -204,19 +204,18 @@ fn bench_lens(name: &str, args: &BenchArgs, quiet: bool) -> anyhow::Result<Vec<B
     for &ap in &args.aperture {
         let aperture = ap.aperture()?;
         let reference = if args.error {
-            if !quiet && !args.json {
+            if !quiet
+                && !args.json
+                && !in_cache(&sys, &aperture, error_frame, lights, args.reflections)
+            {
                 eprintln!(
                     "{name}: rendering the reference at {}×{} ({ap}) …",
                     error_frame.width, error_frame.height
                 );
             }
-            Some(reference_image_of_order(
-                &sys,
-                &aperture,
-                error_frame,
-                lights,
-                args.reflections,
-            )?)
+            let (img, _) =
+                reference_for(&sys, &aperture, error_frame, lights, None, args.reflections)?;
+            Some(img)
         } else {
             None
         };

@@ -24,7 +24,7 @@ use crate::flare::{BackendChoice, BackendReport, GhostBackend};
 use crate::label;
 use crate::lens_library;
 use crate::output::{ToneMap, ToneOperator, save_image};
-use crate::reference_file::{ReferenceSource, reference_for};
+use crate::reference_file::{ReferenceSource, in_cache, reference_for};
 use crate::report::ErrorReport;
 use crate::stats::median;
 use crate::sweep::points::split_algo as split_spec;
@@ -288,7 +288,11 @@ impl Setup {
             (None, None)
         } else {
             let file = args.reference_file.as_deref();
-            if !quiet && !args.json && !file.is_some_and(|f| f.exists()) {
+            let ready = match file {
+                Some(f) => f.exists(),
+                None => in_cache(&sys, &aperture, frame, &args.lights, ReflectionOrder::Two),
+            };
+            if !quiet && !args.json && !ready {
                 eprintln!("rendering the reference …");
             }
             let t = Instant::now();

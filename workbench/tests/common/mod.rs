@@ -8,12 +8,20 @@ pub mod x11;
 
 use serde_json::Value;
 
+/// The reference cache the tests' runs share (`FLAREBENCH_REFERENCE_CACHE`): in the target
+/// directory, not the user's own cache.
+pub const REFERENCE_CACHE: &str = concat!(env!("CARGO_TARGET_TMPDIR"), "/reference-cache");
+
+/// The built `flarebench` binary as a command, with the tests' reference cache.
+pub fn command() -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_flarebench"));
+    c.env("FLAREBENCH_REFERENCE_CACHE", REFERENCE_CACHE);
+    c
+}
+
 /// Runs `flarebench` with `args`.
 pub fn flarebench(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_flarebench"))
-        .args(args)
-        .output()
-        .expect("binary runs")
+    command().args(args).output().expect("binary runs")
 }
 
 /// Runs `flarebench` with `args`, asserts success and parses its standard output as JSON.
