@@ -245,24 +245,50 @@ pub struct StabilityReport {
     pub seconds: f64,
 }
 
-/// Runs the suite on `lenses` (name and system) and the synthetic cases.
+/// Runs the suite on `lenses` (name and system) and the synthetic cases: each lens's field and
+/// stop checks and the synthetic lenses are independent jobs, run in parallel (a job's own
+/// renders are parallel too); the findings come in the same order whatever the threads.
 pub fn run(
     lenses: &[(String, LensSystem)],
     options: SuiteOptions,
-    progress: &dyn Fn(&str),
+    progress: &(dyn Fn(&str) + Sync),
 ) -> StabilityReport {
+    use rayon::prelude::*;
+
+    enum Job {
+        Field(usize),
+        Stops(usize),
+        Synthetic,
+    }
     let start = std::time::Instant::now();
-    let mut findings = Vec::new();
-    for (name, system) in lenses {
-        progress(&format!("{name}: field"));
-        findings.extend(field::check_lens(name, system, options));
-        progress(&format!("{name}: stops"));
-        findings.extend(stops::check_lens(name, system, options));
-    }
+    let mut jobs: Vec<Job> = (0..lenses.len())
+        .flat_map(|i| [Job::Field(i), Job::Stops(i)])
+        .collect();
     if options.synthetic {
-        progress("synthetic lenses");
-        findings.extend(synthetic::check_all(options));
+        jobs.push(Job::Synthetic);
     }
+    let findings: Vec<Finding> = jobs
+        .par_iter()
+        .map(|job| match *job {
+            Job::Field(i) => {
+                let (name, system) = &lenses[i];
+                progress(&format!("{name}: field"));
+                field::check_lens(name, system, options)
+            }
+            Job::Stops(i) => {
+                let (name, system) = &lenses[i];
+                progress(&format!("{name}: stops"));
+                stops::check_lens(name, system, options)
+            }
+            Job::Synthetic => {
+                progress("synthetic lenses");
+                synthetic::check_all(options)
+            }
+        })
+        .collect::<Vec<_>>()
+        .into_iter()
+        .flatten()
+        .collect();
     let failed = findings.iter().filter(|f| !f.pass).count();
     StabilityReport {
         quick: options.quick,
