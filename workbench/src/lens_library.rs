@@ -108,6 +108,7 @@ impl ReadArgs {
                 PbrtConventionArg::ThicknessAfter => PbrtConvention::ThicknessAfter,
                 PbrtConventionArg::SeparationBefore => PbrtConvention::SeparationBefore,
             }),
+            ..ReadOptions::default()
         }
     }
 }
