@@ -130,11 +130,12 @@ fn diameters_are_told_by_a_semi_diameter_beyond_its_radius() {
         .iter()
         .find(|w| w.contains("semi_ap read as diameters (halved), decided from the data (by semi-diameters beyond |R|)"))
         .unwrap_or_else(|| panic!("{:?}", lens.warnings));
+    let (line, _) = position_of(&data("diameter.lens"), "56.000");
     assert!(
-        warning.contains(
-            "as semi-diameters, 1 semi-diameter exceeds |R| (first: row 2, 56 mm against \
+        warning.contains(&format!(
+            "as semi-diameters, 1 semi-diameter exceeds |R| (first: line {line}, 56 mm against \
              |R| = 51.68 mm)"
-        ),
+        )),
         "{warning}"
     );
     let p = analyse(s, LAMBDA_D_NM).unwrap();
@@ -258,7 +259,12 @@ fn lenient_apertures_clamp_what_is_still_impossible_each_with_a_warning() {
         "{}",
         clamps[0]
     );
-    assert!(s.notes.contains("row 2 60 → 51.68 mm"), "{}", s.notes);
+    assert!(
+        s.notes
+            .contains(&format!("line {line}: 60 → 51.68 mm (|R| = 51.68 mm)")),
+        "{}",
+        s.notes
+    );
 }
 
 #[test]
@@ -341,7 +347,7 @@ fn a_coating_on_a_cemented_interface_is_left_out_with_a_warning() {
     assert!(
         lens.warnings
             .iter()
-            .any(|w| w.contains("the coating of row 3 is left out")),
+            .any(|w| w.contains("the coating on line 6 is left out")),
         "{:?}",
         lens.warnings
     );

@@ -109,7 +109,8 @@ pub fn parse_flaresim(
     };
     let (detected, basis) = evidence.decide();
     let convention = aperture.unwrap_or(detected);
-    let why = evidence.explain(detected, basis);
+    let lines: Vec<usize> = table.rows.iter().map(|r| r.line).collect();
+    let why = evidence.explain(detected, basis, &lines);
     match aperture {
         None => {
             ctx.warn(
@@ -282,7 +283,7 @@ fn build_surfaces(
         let coating = match coating::stack(row.coating, before, row.ior) {
             Some(c) => c,
             None => {
-                bare.push(i + 1);
+                bare.push(i);
                 crate::coating::Coating::None
             }
         };
@@ -301,9 +302,9 @@ fn build_surfaces(
              stop)",
         ));
     }
-    let rows = |v: &[usize]| {
+    let lines = |v: &[usize]| {
         v.iter()
-            .map(|r| r.to_string())
+            .map(|&i| table.rows[i].line.to_string())
             .collect::<Vec<_>>()
             .join(", ")
     };
@@ -318,19 +319,22 @@ fn build_surfaces(
         ));
     }
     if !bare.is_empty() {
+        let (s, are) = if bare.len() == 1 {
+            ("", "is")
+        } else {
+            ("s", "are")
+        };
         ctx.warn(
             table.surfaces_pos,
             format!(
-                "the coating of row{} {} is left out: no air on either side (a cemented \
-                 interface, or air on both)",
-                if bare.len() == 1 { "" } else { "s" },
-                rows(&bare)
+                "the coating{s} on line{s} {} {are} left out: no air on either side (a \
+                 cemented interface, or air on both)",
+                lines(&bare)
             ),
         );
         notes.push(format!(
-            "The coating the file gives row{} {} is left out: no air on either side.",
-            if bare.len() == 1 { "" } else { "s" },
-            rows(&bare)
+            "The coating{s} the file gives on line{s} {} {are} left out: no air on either side.",
+            lines(&bare)
         ));
     }
     surfaces.push(Surface::sensor(0.5 * FILM_MM.0.hypot(FILM_MM.1)));
@@ -430,6 +434,7 @@ fn settle_apertures(
     notes: &mut Vec<String>,
 ) -> Result<(), LensFileError> {
     let rows = table.rows.len();
+    let lines: Vec<usize> = table.rows.iter().map(|r| r.line).collect();
     let column = |i: usize| match convention {
         LensApertureConvention::Semi => String::new(),
         LensApertureConvention::Diameter => {
@@ -446,13 +451,23 @@ fn settle_apertures(
             "they cross from the axis out, which no clamp undoes".to_string()
         };
         format!(
-            "rows {} and {} cross inside their clear apertures (by {} mm at {} mm from the \
-             axis; missing aspheres or oversized apertures); {fix}",
-            c.first + 1,
-            c.first + 2,
+            "the surfaces on lines {} and {} cross inside their clear apertures (by {} mm at \
+             {} mm from the axis; missing aspheres or oversized apertures); {fix}",
+            lines[c.first],
+            lines[c.first + 1],
             round(c.depth),
             round(c.height),
         )
+    };
+    let cause = |c: &clearance::Clamp| match c.cause {
+        clearance::Cause::Radius { limit } => format!("|R| = {} mm", round(limit)),
+        clearance::Cause::Crossing(x) => format!(
+            "the surfaces on lines {} and {} cross beyond it, by {} mm at {} mm",
+            lines[x.first],
+            lines[x.first + 1],
+            round(x.depth),
+            round(x.height)
+        ),
     };
     if lenient {
         let (clamps, left) = clearance::clamp(&mut system.surfaces[..rows]);
@@ -467,7 +482,7 @@ fn settle_apertures(
                      (--lenient-apertures)",
                     round(c.from),
                     round(c.to),
-                    c.why
+                    cause(c)
                 ),
             );
         }
@@ -476,11 +491,11 @@ fn settle_apertures(
                 .iter()
                 .map(|c| {
                     format!(
-                        "row {} {} → {} mm ({})",
-                        c.surface + 1,
+                        "line {}: {} → {} mm ({})",
+                        lines[c.surface],
                         round(c.from),
                         round(c.to),
-                        c.why
+                        cause(c)
                     )
                 })
                 .collect();
@@ -519,7 +534,7 @@ fn settle_apertures(
     if !impossible.crossings.is_empty() {
         notes.push(format!(
             "Neighbouring surfaces cross inside their clear apertures: {}.",
-            impossible.describe()
+            impossible.describe(&lines)
         ));
     }
     Ok(())

@@ -47,17 +47,18 @@ impl Impossible {
         self.beyond_radius.is_empty() && self.crossings.is_empty()
     }
 
-    /// One sentence for messages, e.g. "2 semi-diameters exceed |R| (first: row 3, 61.8 mm
-    /// against |R| = 51.5 mm) and 1 pair of neighbouring surfaces crosses (first: rows 4 and
-    /// 5, by 0.52 mm at 12.3 mm from the axis)"; rows are numbered from 1 as in the table.
-    pub fn describe(&self) -> String {
+    /// One sentence for messages, e.g. "2 semi-diameters exceed |R| (first: line 14, 61.8 mm
+    /// against |R| = 51.5 mm) and 1 pair of neighbouring surfaces crosses (first: lines 16 and
+    /// 17, by 0.52 mm at 12.3 mm from the axis)"; `lines` gives each surface's line in the file.
+    pub fn describe(&self, lines: &[usize]) -> String {
+        let line = |i: usize| lines.get(i).copied().unwrap_or(0);
         let mut parts = Vec::new();
         if let Some(b) = self.beyond_radius.first() {
             let n = self.beyond_radius.len();
             parts.push(format!(
-                "{n} semi-diameter{} |R| (first: row {}, {} mm against |R| = {} mm)",
+                "{n} semi-diameter{} |R| (first: line {}, {} mm against |R| = {} mm)",
                 if n == 1 { " exceeds" } else { "s exceed" },
-                b.surface + 1,
+                line(b.surface),
                 round(b.semi_diameter),
                 round(b.limit)
             ));
@@ -65,12 +66,12 @@ impl Impossible {
         if let Some(c) = self.crossings.first() {
             let n = self.crossings.len();
             parts.push(format!(
-                "{n} pair{} of neighbouring surfaces cross{} (first: rows {} and {}, by {} mm \
+                "{n} pair{} of neighbouring surfaces cross{} (first: lines {} and {}, by {} mm \
                  at {} mm from the axis)",
                 if n == 1 { "" } else { "s" },
                 if n == 1 { "es" } else { "" },
-                c.first + 1,
-                c.first + 2,
+                line(c.first),
+                line(c.first + 1),
                 round(c.depth),
                 round(c.height)
             ));
@@ -155,12 +156,22 @@ fn crossing(a: &Surface, b: &Surface) -> Option<Crossing> {
 }
 
 /// One clamp the lenient option made, for its warning and the notes.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) struct Clamp {
     pub surface: usize,
     pub from: f64,
     pub to: f64,
-    pub why: String,
+    pub cause: Cause,
+}
+
+/// Why a semi-diameter was clamped.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum Cause {
+    /// It exceeded |R| (mm).
+    Radius { limit: f64 },
+    /// It and its neighbour `crossing.first + 1` (or `crossing.first`) crossed beyond the
+    /// height they were clamped to.
+    Crossing(Crossing),
 }
 
 /// Makes every clear aperture possible: a semi-diameter beyond |R| becomes |R| (the last float
@@ -186,7 +197,7 @@ pub(super) fn clamp(surfaces: &mut [Surface]) -> (Vec<Clamp>, Vec<Crossing>) {
             surface: b.surface,
             from: s.semi_diameter,
             to,
-            why: format!("|R| = {} mm", round(b.limit)),
+            cause: Cause::Radius { limit: b.limit },
         });
         s.semi_diameter = to;
     }
@@ -205,13 +216,7 @@ pub(super) fn clamp(surfaces: &mut [Surface]) -> (Vec<Clamp>, Vec<Crossing>) {
                     surface: k,
                     from: s.semi_diameter,
                     to: c.meet,
-                    why: format!(
-                        "rows {} and {} cross beyond it (by {} mm at {} mm)",
-                        i + 1,
-                        i + 2,
-                        round(c.depth),
-                        round(c.height)
-                    ),
+                    cause: Cause::Crossing(Crossing { first: i, ..c }),
                 });
                 s.semi_diameter = c.meet;
             }

@@ -159,10 +159,11 @@ impl Evidence {
         (best <= F_NUMBER_MATCH.ln()).then_some(c)
     }
 
-    /// Why `chosen` was read, in one sentence (without the conclusion), e.g. "as semi-diameters
-    /// 2 semi-diameters exceed |R| (…); the stop gives f/1.42 as diameters, f/0.71 as
-    /// semi-diameters, against the stated f/1.4 (comment header)".
-    pub fn explain(&self, chosen: LensApertureConvention, basis: Basis) -> String {
+    /// Why `chosen` was read, in one sentence (without the conclusion), e.g. "as
+    /// semi-diameters, 2 semi-diameters exceed |R| (…); the stop gives f/1.42 as diameters,
+    /// f/0.71 as semi-diameters, against the stated f/1.4 (comment header)"; `lines` gives each
+    /// surface's line in the file.
+    pub fn explain(&self, chosen: LensApertureConvention, basis: Basis, lines: &[usize]) -> String {
         let other = match chosen {
             LensApertureConvention::Semi => LensApertureConvention::Diameter,
             LensApertureConvention::Diameter => LensApertureConvention::Semi,
@@ -170,7 +171,11 @@ impl Evidence {
         let mut parts = Vec::new();
         let other_bad = &self.reading(other).impossible;
         if !other_bad.is_empty() {
-            parts.push(format!("as {}, {}", other.reading(), other_bad.describe()));
+            parts.push(format!(
+                "as {}, {}",
+                other.reading(),
+                other_bad.describe(lines)
+            ));
         }
         parts.push(self.stop_sentence(chosen, other));
         if basis == Basis::Undecided {
@@ -262,9 +267,9 @@ mod tests {
             e.decide(),
             (LensApertureConvention::Diameter, Basis::BeyondRadius)
         );
-        let why = e.explain(LensApertureConvention::Diameter, Basis::BeyondRadius);
+        let why = e.explain(LensApertureConvention::Diameter, Basis::BeyondRadius, &[12]);
         assert!(
-            why.contains("as semi-diameters, 2 semi-diameters exceed |R|"),
+            why.contains("as semi-diameters, 2 semi-diameters exceed |R| (first: line 12, 2 mm"),
             "{why}"
         );
         assert!(

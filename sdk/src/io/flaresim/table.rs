@@ -53,6 +53,8 @@ pub(super) struct Row {
     pub coating: u8,
     /// Byte offset of each of the six columns.
     pub pos: [usize; 6],
+    /// The row's line in the file (1-based), for messages about several rows.
+    pub line: usize,
 }
 
 /// A header field's value and the byte offset of that value.
@@ -84,7 +86,7 @@ pub(super) fn read(ctx: &mut Reporter<'_>, text: &str) -> Result<Table, LensFile
     let mut surfaces_pos = None;
     let mut rows = Vec::new();
     let mut start = 0;
-    for line in text.split_inclusive('\n') {
+    for (index, line) in text.split_inclusive('\n').enumerate() {
         let line_start = start;
         start += line.len();
         let content = line.trim_end_matches(['\n', '\r']);
@@ -158,7 +160,9 @@ pub(super) fn read(ctx: &mut Reporter<'_>, text: &str) -> Result<Table, LensFile
         if toks.is_empty() {
             continue;
         }
-        rows.push(read_row(ctx, &toks, line_start + content.len())?);
+        let mut row = read_row(ctx, &toks, line_start + content.len())?;
+        row.line = index + 1;
+        rows.push(row);
     }
     let Some(surfaces_pos) = surfaces_pos else {
         return Err(ctx.error(
@@ -251,6 +255,7 @@ fn read_row(ctx: &Reporter<'_>, toks: &[(usize, &str)], end: usize) -> Result<Ro
         semi_ap,
         coating,
         pos,
+        line: 0,
     })
 }
 
