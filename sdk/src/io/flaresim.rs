@@ -85,9 +85,58 @@ pub fn parse_flaresim(
     let surfaces = build_surfaces(&mut ctx, &table, &mut notes)?;
     let mut system = new_system(&mut ctx, &table, &file_name, surfaces);
 
-    // Both readings of the column, and the stop against the stated f-number.
-    let open_f_number = open_f_number(&ctx, &table, &system)?;
-    let stated = f_number::stated(&table.comments, &system.name, &file_name);
+    let (convention, stated) =
+        choose_convention(&mut ctx, &table, &system, &file_name, aperture, &mut notes)?;
+    for s in &mut system.surfaces[..table.rows.len()] {
+        s.semi_diameter *= convention.scale();
+    }
+    settle_apertures(
+        &mut ctx,
+        &table,
+        &mut system,
+        convention,
+        lenient,
+        &mut notes,
+    )?;
+
+    if let Some((n, from)) = stated {
+        system.f_number = Some(n);
+        notes.push(format!(
+            "The f-number setting f/{n} is the one the file states ({from})."
+        ));
+    }
+    notes.push(
+        "Glasses are model glasses from the ior (nd) and abbe (Vd) columns. The sensor is at \
+         the last row's thickness behind the last surface; the film is taken as 36 × 24 mm."
+            .to_string(),
+    );
+    if !table.comments.is_empty() {
+        notes.insert(0, format!("File header: {}", table.comments.join("; ")));
+    }
+    system.notes = notes.join("\n");
+
+    if let Err(issues) = system.validate() {
+        return Err(located(&ctx, &table, &issues));
+    }
+    Ok(LoadedLens {
+        system,
+        warnings: ctx.warnings,
+    })
+}
+
+/// Reads the `semi_ap` column both ways and settles what it holds: as forced, or decided from
+/// the data ([`convention`]), said in a warning and in the notes. Returns the convention and
+/// the stated f-number. `system` holds the column's values as semi-diameters.
+fn choose_convention(
+    ctx: &mut Reporter<'_>,
+    table: &Table,
+    system: &LensSystem,
+    file_name: &str,
+    aperture: Option<LensApertureConvention>,
+    notes: &mut Vec<String>,
+) -> Result<(LensApertureConvention, Option<f_number::Stated>), LensFileError> {
+    let open_f_number = open_f_number(ctx, table, system)?;
+    let stated = f_number::stated(&table.comments, &system.name, file_name);
     let lens_rows = table.rows.len();
     let reading = |scale: f64| {
         let scaled: Vec<Surface> = system.surfaces[..lens_rows]
@@ -146,41 +195,7 @@ pub fn parse_flaresim(
             ));
         }
     }
-    for s in &mut system.surfaces[..lens_rows] {
-        s.semi_diameter *= convention.scale();
-    }
-    settle_apertures(
-        &mut ctx,
-        &table,
-        &mut system,
-        convention,
-        lenient,
-        &mut notes,
-    )?;
-
-    if let Some((n, from)) = stated {
-        system.f_number = Some(n);
-        notes.push(format!(
-            "The f-number setting f/{n} is the one the file states ({from})."
-        ));
-    }
-    notes.push(
-        "Glasses are model glasses from the ior (nd) and abbe (Vd) columns. The sensor is at \
-         the last row's thickness behind the last surface; the film is taken as 36 × 24 mm."
-            .to_string(),
-    );
-    if !table.comments.is_empty() {
-        notes.insert(0, format!("File header: {}", table.comments.join("; ")));
-    }
-    system.notes = notes.join("\n");
-
-    if let Err(issues) = system.validate() {
-        return Err(located(&ctx, &table, &issues));
-    }
-    Ok(LoadedLens {
-        system,
-        warnings: ctx.warnings,
-    })
+    Ok((convention, stated))
 }
 
 /// Per-row checks of values the model cannot hold or that mean something unsupported.

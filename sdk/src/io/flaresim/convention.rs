@@ -19,6 +19,7 @@
 use std::str::FromStr;
 
 use super::clearance::Impossible;
+use super::f_number::Stated;
 
 /// The stop's paraxial f-number matches the stated one when their ratio is within this factor:
 /// the two readings differ by a factor of 2, and the files state f-numbers rounded to 0.1
@@ -88,7 +89,7 @@ pub(super) struct Evidence {
     pub semi: Reading,
     pub diameter: Reading,
     /// The f-number the file states, and where it says so (for messages).
-    pub stated_f_number: Option<(f64, &'static str)>,
+    pub stated_f_number: Option<Stated>,
 }
 
 /// Which step of the rule decided.

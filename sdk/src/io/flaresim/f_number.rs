@@ -5,12 +5,11 @@
 //! (the prescription's own, after a zoom's nominal range in its title), else the first `f/N`
 //! or `fN` of the name, else of the file name.
 
+/// An f-number a file states, and where it says so ("comment header", "name", "file name").
+pub(super) type Stated = (f64, &'static str);
+
 /// The stated f-number and where it was found.
-pub(super) fn stated(
-    comments: &[String],
-    name: &str,
-    file_name: &str,
-) -> Option<(f64, &'static str)> {
+pub(super) fn stated(comments: &[String], name: &str, file_name: &str) -> Option<Stated> {
     let header = comments
         .iter()
         .rev()
