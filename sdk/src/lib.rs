@@ -4,7 +4,7 @@
 //! - [`glass`]: dispersion — the exact two-term Cauchy fit from nd/Vd and the refractiveindex.info
 //!   catalogue formulas for 1613 named glasses.
 //! - [`io`]: reading and writing lens files (OpenLensFlare XML and our superset of it, Zemax
-//!   `.zmx`, PBRT `.dat`) and OpenLensFlare's ghost bounds.
+//!   `.zmx`, PBRT `.dat`, FlareSim `.lens`) and OpenLensFlare's ghost bounds.
 //! - [`trace`]: the sequential ray tracer (scalar f64, batched structure-of-arrays f32/f64).
 //! - [`fresnel`] and [`coating`]: interface reflectance, bare and with thin-film coatings.
 //! - [`paraxial`]: first-order analysis (focal lengths, pupils, f-number, Petzval sum).

@@ -4,10 +4,12 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
-use flarebench_sdk::io::{LoadedLens, PbrtConvention, ReadOptions, read_lens_with};
+use flarebench_sdk::io::{
+    LensApertureConvention, LoadedLens, PbrtConvention, ReadOptions, read_lens_with,
+};
 
 /// Extensions tried when a bundled lens is named without one.
-const EXTENSIONS: &[&str] = &["xml", "zmx", "dat"];
+const EXTENSIONS: &[&str] = &["xml", "zmx", "dat", "lens"];
 
 /// Directories searched for bundled lenses, in order: `$FLAREBENCH_LENS_DIR`, `lenses/` beside
 /// the executable or two levels up (a cargo target dir), then the source tree's `lenses/`.
@@ -88,6 +90,24 @@ pub struct ReadArgs {
     /// first and last rows.
     #[arg(long, value_enum, value_name = "CONVENTION")]
     pub pbrt_convention: Option<PbrtConventionArg>,
+    /// What the `semi_ap` column of a FlareSim `.lens` file holds; default: decided from the
+    /// data (a warning says which and why).
+    #[arg(long, value_enum, value_name = "CONVENTION")]
+    pub lens_aperture: Option<LensApertureArg>,
+    /// For FlareSim `.lens` files: clamp clear apertures that are still impossible (beyond
+    /// |R|, or making neighbouring surfaces cross) to what the surfaces allow, each clamp a
+    /// warning, instead of refusing the lens.
+    #[arg(long)]
+    pub lenient_apertures: bool,
+}
+
+/// `--lens-aperture` values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum LensApertureArg {
+    /// Clear semi-diameters, as the column is named.
+    Semi,
+    /// Clear diameters (each value halved), as most files of FlareSim's library hold.
+    Diameter,
 }
 
 /// `--pbrt-convention` values.
@@ -108,6 +128,11 @@ impl ReadArgs {
                 PbrtConventionArg::ThicknessAfter => PbrtConvention::ThicknessAfter,
                 PbrtConventionArg::SeparationBefore => PbrtConvention::SeparationBefore,
             }),
+            lens_aperture: self.lens_aperture.map(|c| match c {
+                LensApertureArg::Semi => LensApertureConvention::Semi,
+                LensApertureArg::Diameter => LensApertureConvention::Diameter,
+            }),
+            lenient_apertures: self.lenient_apertures,
         }
     }
 }
@@ -117,7 +142,8 @@ pub fn load(spec: &str, quiet: bool) -> anyhow::Result<LoadedLens> {
     load_with(spec, quiet, &ReadOptions::default())
 }
 
-/// Resolves and loads a lens (OpenLensFlare/flarebench XML, Zemax `.zmx`, PBRT `.dat`);
+/// Resolves and loads a lens (OpenLensFlare/flarebench XML, Zemax `.zmx`, PBRT `.dat`,
+/// FlareSim `.lens`);
 /// warnings are printed to stderr unless `quiet`.
 pub fn load_with(spec: &str, quiet: bool, options: &ReadOptions) -> anyhow::Result<LoadedLens> {
     let path = resolve(spec)?;

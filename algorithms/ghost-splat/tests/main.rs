@@ -13,8 +13,5 @@ mod plugin;
 #[test]
 fn every_test_file_is_a_module_of_this_binary() {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests");
-    assert_eq!(
-        flarebench_test_support::assert_every_test_file_is_a_module(&dir, &[]),
-        3
-    );
+    flarebench_test_support::assert_every_test_file_is_a_module(&dir, &[]);
 }

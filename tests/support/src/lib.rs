@@ -1,11 +1,13 @@
 //! Helpers shared by the workspace's tests and benches (a dev-dependency of every crate that
-//! tests against the bundled lenses or the built plugin libraries): the lens library, the
-//! plugin libraries `cargo build --workspace` puts in the target directory, and the fixtures
-//! several crates' tests share.
+//! tests against the bundled lenses or the built plugin libraries): the lens library,
+//! FlareSim's library in `tests/data/`, the plugin libraries `cargo build --workspace` puts in
+//! the target directory, and the fixtures several crates' tests share.
 
 use std::path::{Path, PathBuf};
 
-use flarebench_sdk::io::read_lens;
+use flarebench_sdk::io::{
+    LensFileError, LoadedLens, ReadOptions, parse_flaresim, read_lens, read_lens_with,
+};
 use flarebench_sdk::{LensSystem, Medium, Surface};
 
 /// The repository's `lenses/` directory.
@@ -30,6 +32,38 @@ pub fn library_stems() -> Vec<String> {
         .collect();
     stems.sort();
     stems
+}
+
+/// FlareSim's lens library, `tests/data/flaresim-lenses/lens_files/` (1,373 `.lens` files,
+/// MIT; source and licence in `tests/data/flaresim-lenses/`).
+pub fn flaresim_library_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/flaresim-lenses/lens_files")
+}
+
+/// Every file of FlareSim's library, sorted.
+pub fn flaresim_library_files() -> Vec<PathBuf> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(flaresim_library_dir())
+        .expect("the library is in tests/data/flaresim-lenses")
+        .map(|e| e.expect("directory entry").path())
+        .collect();
+    files.sort();
+    files
+}
+
+/// Reads one file of FlareSim's library as a user would, by its `.lens` extension; the three
+/// whose names were cut short before `.lens` (a `/` in the lens's name) are read as `.lens`
+/// text with `parse_flaresim`. `lenient` clamps clear apertures that are still impossible.
+pub fn read_flaresim_library_file(path: &Path, lenient: bool) -> Result<LoadedLens, LensFileError> {
+    if path.extension().is_some_and(|e| e == "lens") {
+        let options = ReadOptions {
+            lenient_apertures: lenient,
+            ..ReadOptions::default()
+        };
+        return read_lens_with(path, &options);
+    }
+    let label = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|e| LensFileError::io(&label, &e))?;
+    parse_flaresim(&text, &label, None, lenient)
 }
 
 /// The target directory the running test or bench was built into (`target/debug`,

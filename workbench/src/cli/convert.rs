@@ -1,6 +1,6 @@
 //! `flarebench convert`: read any lens file we read (OpenLensFlare/flarebench XML, Zemax
-//! `.zmx`, PBRT `.dat`) and write it as our XML, atomically. What the reader approximated is
-//! printed as warnings and kept in the written file's notes.
+//! `.zmx`, PBRT `.dat`, FlareSim `.lens`) and write it as our XML, atomically. What the reader
+//! approximated is printed as warnings and kept in the written file's notes.
 
 use std::path::PathBuf;
 
@@ -13,7 +13,8 @@ use crate::lens_library::{self, ReadArgs};
 
 #[derive(Debug, Args)]
 pub struct ConvertArgs {
-    /// Lens file to read (`.xml`, Zemax `.zmx`, PBRT `.dat`) or the name of a bundled lens.
+    /// Lens file to read (`.xml`, Zemax `.zmx`, PBRT `.dat`, FlareSim `.lens`) or the name of a
+    /// bundled lens.
     pub input: String,
     /// Where to write our XML (must end in `.xml`; replaced atomically if it exists).
     #[arg(short, long, value_name = "OUT.xml")]

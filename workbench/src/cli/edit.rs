@@ -16,8 +16,9 @@ const DEFAULT_LENS: &str = "heliar-tronnier";
 
 #[derive(Debug, Args)]
 pub struct EditArgs {
-    /// Lens file (`.xml`; `.zmx` and `.dat` are saved as `.xml` beside them) or the name of a
-    /// bundled lens. Without one, a copy of the bundled Heliar-Tronnier (saving asks for a path).
+    /// Lens file (`.xml`; `.zmx`, `.dat` and `.lens` are saved as `.xml` beside them) or the
+    /// name of a bundled lens. Without one, a copy of the bundled Heliar-Tronnier (saving asks
+    /// for a path).
     pub lens: Option<String>,
     /// Open the viewer window beside the editor: the lens section and a live flare preview
     /// that follow every edit (docs/window.md). `W` or `:window` opens it later.

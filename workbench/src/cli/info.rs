@@ -11,8 +11,8 @@ use crate::table::Table;
 
 #[derive(Debug, Args)]
 pub struct InfoArgs {
-    /// Lens file (OpenLensFlare/flarebench `.xml`, Zemax `.zmx`, PBRT `.dat`) or the name of a
-    /// bundled lens.
+    /// Lens file (OpenLensFlare/flarebench `.xml`, Zemax `.zmx`, PBRT `.dat`, FlareSim
+    /// `.lens`) or the name of a bundled lens.
     pub lens: String,
     /// Wavelength for indices and paraxial data (nm); default: the lens's primary wavelength
     /// (Zemax PWAV), else the d line, 587.5618 nm.

@@ -46,7 +46,7 @@ pub enum Command {
     Trace(trace::TraceArgs),
     /// Time ghost rendering per lens and quality preset, with the error against the reference.
     Bench(bench::BenchArgs),
-    /// Read a lens file (.xml, Zemax .zmx, PBRT .dat) and write it as flarebench XML.
+    /// Read a lens file (.xml, Zemax .zmx, PBRT .dat, FlareSim .lens) and write it as flarebench XML.
     Convert(convert::ConvertArgs),
     /// Edit a lens prescription in the terminal (spreadsheet, undo, live analysis).
     #[cfg(feature = "tui")]

@@ -10,8 +10,8 @@ use crate::table::Table;
 
 #[derive(Debug, Args)]
 pub struct TraceArgs {
-    /// Lens file (OpenLensFlare/flarebench `.xml`, Zemax `.zmx`, PBRT `.dat`) or the name of a
-    /// bundled lens.
+    /// Lens file (OpenLensFlare/flarebench `.xml`, Zemax `.zmx`, PBRT `.dat`, FlareSim
+    /// `.lens`) or the name of a bundled lens.
     pub lens: String,
     /// Angle of the ray to the optical axis (degrees), in the y–z plane before rotation.
     #[arg(long, allow_negative_numbers = true)]
