@@ -15,5 +15,5 @@ mod source_focal_lengths;
 #[test]
 fn every_test_file_is_a_module_of_this_binary() {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-    flarebench_test_support::assert_every_test_file_is_a_module(&dir, &[]);
+    flarebench_test_support::assert_every_test_file_is_a_module(dir, &[]);
 }
