@@ -8,6 +8,7 @@ mod abi_layout;
 mod analytic_optics;
 mod bounds_monte_carlo;
 mod chief_ray;
+mod flaresim;
 mod flaresim_corpus;
 mod four_reflection_bound;
 mod ghost_render;
