@@ -98,9 +98,10 @@ impl std::fmt::Display for ReferenceSource {
     }
 }
 
-/// The reference image of the scene (its ghosts of `reflections`): read from `file` when it exists (and was made for this
-/// scene — else an error naming both keys), otherwise rendered and, with `file`, written
-/// there.
+/// The reference image of the scene (its ghosts of `reflections`): read from `file` when it
+/// exists (and was made for this scene — else an error naming both keys), otherwise rendered
+/// and, with `file`, written there. Without `file`, read from the cache when it holds this
+/// scene, else rendered and kept there ([`cache_dir`]; the module's docs).
 pub fn reference_for(
     system: &LensSystem,
     aperture: &Aperture,
