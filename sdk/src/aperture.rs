@@ -312,6 +312,20 @@ impl ApertureSampler<'_> {
         (t, if reach > 0.0 { reach as f32 } else { 0.0 })
     }
 
+    /// True when [`Self::transmission_soft`] with `feather` is the feather's smoothstep of
+    /// [`Self::signed_distance`] (`smooth_edge`): always for the circle and an iris, for a mask
+    /// where the feather is wider than a texel (under it, the bilinear transmission).
+    #[inline]
+    pub fn soft_is_distance_ramp(&self, feather: f32) -> bool {
+        match self.shape {
+            Shape::Mask(m) => {
+                let (tu, tv) = m.texel_size();
+                feather > tu.max(tv)
+            }
+            _ => feather > 0.0,
+        }
+    }
+
     /// See [`Aperture::signed_distance`].
     #[inline]
     pub fn signed_distance(&self, u: f32, v: f32) -> f32 {

@@ -206,10 +206,10 @@ impl ApertureMask {
     ///   field at `(u, v)` is within a texel diagonal of the distance to the nearest texel
     ///   centre on the other side, so `|d| ≥ 2 radius + 4 texels` leaves every centre within
     ///   `radius` plus a diagonal on one side;
-    /// - a wider feather ramps on the field, whose slope is at most `lipschitz + 1` (the
-    ///   interpolation's, plus the distance added beyond the outermost centres): wholly open
-    ///   where `d + (lipschitz + 1) radius ≤ −feather/2`, closed where
-    ///   `d − (lipschitz + 1) radius ≥ feather/2`.
+    /// - a wider feather ramps on the field, whose slope is at most `lipschitz` within the
+    ///   square of the outermost texel centres and `lipschitz + 1` beyond (the distance to
+    ///   them added): wholly open where `d + slope · radius ≤ −feather/2`, closed where
+    ///   `d − slope · radius ≥ feather/2`.
     pub fn uniform_around(&self, u: f32, v: f32, radius: f32, feather: f32) -> Option<f32> {
         let d = f64::from(self.signed_distance(u, v));
         let (tu, tv) = self.texel_size();
@@ -220,7 +220,7 @@ impl ApertureMask {
             }
             2.0 * r + 4.0 * f64::from(tu.max(tv))
         } else {
-            (f64::from(self.lipschitz) + 1.0) * r + 0.5 * f
+            self.slope_within(u, v, r) * r + 0.5 * f
         };
         // A little more for the roundings of f32 positions and distances.
         let margin = margin + UNIFORM_SLACK;
@@ -235,7 +235,9 @@ impl ApertureMask {
 
     /// The soft transmission at `(u, v)` (as `ApertureSampler::transmission_soft`, `feather`
     /// positive) and a distance within which it is the same: [`Self::uniform_around`]'s
-    /// margins solved for the radius (0 where they leave none).
+    /// margins solved for the radius (0 where they leave none), for a wide feather with the
+    /// field's slope among the texel centres (`lipschitz`, without the distance added beyond
+    /// them) as far as they reach.
     pub fn transmission_reach(&self, u: f32, v: f32, feather: f32) -> (f32, f32) {
         let (tu, tv) = self.texel_size();
         let d = f64::from(self.signed_distance(u, v));
@@ -253,10 +255,26 @@ impl ApertureMask {
         } else {
             let f = f64::from(feather);
             let t = super::smooth_edge(d, f) as f32;
-            let reach = (d.abs() - 0.5 * f - UNIFORM_SLACK) / (f64::from(self.lipschitz) + 1.0);
+            let room = d.abs() - 0.5 * f - UNIFORM_SLACK;
+            let slope = f64::from(self.lipschitz);
+            // Within the texel centres' square, the field's slope is `lipschitz`
+            // (`slope_within`).
+            let (eu, ev) = (1.0 - 0.5 * tu, 1.0 - 0.5 * tv);
+            let to_centres_edge = f64::from((eu - u.abs()).min(ev - v.abs()));
+            let reach = (room / (slope + 1.0)).max((room / slope).min(to_centres_edge));
             (t, reach)
         };
         (t, if reach > 0.0 { reach as f32 } else { 0.0 })
+    }
+
+    /// A bound on the distance field's slope within `radius` of `(u, v)`: `lipschitz` where
+    /// that disc lies within the square of the outermost texel centres (the bilinear field's
+    /// own slope), `lipschitz + 1` elsewhere (the distance beyond them added).
+    fn slope_within(&self, u: f32, v: f32, radius: f64) -> f64 {
+        let (tu, tv) = self.texel_size();
+        let (eu, ev) = (1.0 - 0.5 * f64::from(tu), 1.0 - 0.5 * f64::from(tv));
+        let inside = f64::from(u).abs() + radius <= eu && f64::from(v).abs() + radius <= ev;
+        f64::from(self.lipschitz) + if inside { 0.0 } else { 1.0 }
     }
 
     /// `Σ T × texel area`: the exact integral of the bilinear transmission (module docs).

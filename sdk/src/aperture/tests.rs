@@ -522,3 +522,51 @@ fn uniform_around_is_never_wrong() {
     assert_eq!(s.uniform_around(0.0, 0.0, 0.1, 0.01), Some(1.0));
     assert_eq!(s.uniform_around(2.0, 0.0, 0.1, 0.01), Some(0.0));
 }
+
+/// `transmission_reach`'s answer checked on a dense sample of the disc of its reach: the soft
+/// transmission there is the one it gave; returns how often the reach was positive.
+fn check_reach(aperture: &Aperture, feather: f32, seed: u64) -> usize {
+    let sampler = aperture.sampler();
+    let mut state = seed;
+    let mut unit = || {
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (state >> 40) as f32 / (1u64 << 24) as f32
+    };
+    let mut reached = 0;
+    for _ in 0..3000 {
+        let (u, v) = (2.4 * unit() - 1.2, 2.4 * unit() - 1.2);
+        let (t, reach) = sampler.transmission_reach(u, v, feather);
+        assert_eq!(t, sampler.transmission_soft(u, v, feather), "({u}, {v})");
+        if reach <= 0.0 {
+            continue;
+        }
+        reached += 1;
+        for k in 0..200 {
+            let r = reach * ((k % 10) as f32 + 1.0) / 10.0;
+            let a = k as f32 * 0.7;
+            let (x, y) = (u + r * a.cos(), v + r * a.sin());
+            let s = sampler.transmission_soft(x, y, feather);
+            assert_eq!(
+                s, t,
+                "{aperture:?} feather {feather}: ({u}, {v}) reach {reach} said {t}, ({x}, {y}) has {s}"
+            );
+        }
+    }
+    reached
+}
+
+#[test]
+fn transmission_reach_is_never_wrong() {
+    for feather in [1e-3_f32, 0.01, 0.05] {
+        assert!(check_reach(&Aperture::Circular, feather, 1) > 2000);
+        assert!(check_reach(&iris(6, 0.3, 0.2), feather, 2) > 2000);
+        let hard = Aperture::Mask(hard_circle(64));
+        assert!(check_reach(&hard, feather, 4) > 1000, "{feather}");
+        let grey = Aperture::Circular.rasterize(64, 64).unwrap();
+        let reached = check_reach(&Aperture::Mask(grey), feather, 5);
+        let texel = 2.0 / 64.0;
+        assert!((feather <= texel) == (reached == 0), "{feather}: {reached}");
+    }
+}

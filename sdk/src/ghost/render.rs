@@ -17,7 +17,7 @@
 //! [`super::context`], the triangles in [`super::triangles`] and [`super::mesh`], the row splits
 //! the shaders share in [`super::row_split`].
 
-use crate::aperture::Aperture;
+use crate::aperture::{Aperture, ApertureSampler};
 use crate::image::HdrImage;
 use crate::raster::boxes::splat_boxes_into;
 use crate::raster::{Coverage, RowSplit, Shader, rasterize_into, rasterize_shaded_into};
@@ -26,7 +26,10 @@ use super::context::{BandRef, GhostContext, GhostGrid, GhostStats};
 use super::fringe::FringeShader;
 use super::grid::GridTrace;
 use super::mesh::{EdgeAttrs, GhostMesh, Mesh, OpenAttrs, SAMPLED_MIN_AREA};
-use super::row_split::{SPLIT_MARGIN, intersect, linear_split, parabola_split, smoothstep};
+use super::row_split::{
+    APERTURE_SPLIT_MARGIN, SPLIT_MARGIN, aperture_split, intersect, linear_split, parabola_split,
+    smoothstep,
+};
 use super::triangles::{BandTriangles, grid_triangles, trace_band};
 
 /// Reusable buffers for [`render_ghost`].
@@ -152,6 +155,7 @@ pub fn rasterize_ghost_mesh_with(
     if matches!(aperture, Aperture::Circular) {
         let shader = EdgeShader {
             circle: true,
+            sampler: None,
             aperture: |u: f32, v: f32, feather: f32| {
                 smoothstep(0.5 * feather, -0.5 * feather, (u * u + v * v).sqrt() - 1.0)
             },
@@ -161,6 +165,7 @@ pub fn rasterize_ghost_mesh_with(
         let sampler = aperture.sampler();
         let shader = EdgeShader {
             circle: false,
+            sampler: Some(sampler),
             aperture: |u, v, feather| sampler.transmission_soft(u, v, feather),
         };
         rasterize_edges(pixels, width, &mesh.edge, coverage, &shader);
@@ -219,13 +224,14 @@ fn rasterize_edges<A: Fn(f32, f32, f32) -> f32 + Sync>(
 
 /// The shade of an edge triangle ([`EdgeAttrs`]): the irradiance times the clip radius's
 /// feathered step and, where flagged, `aperture(u, v, feather)` (the aperture's soft
-/// transmission; `circle` when it is the unit circle's).
-struct EdgeShader<A> {
+/// transmission; `circle` when it is the unit circle's, else `sampler`'s).
+struct EdgeShader<'a, A> {
     circle: bool,
+    sampler: Option<ApertureSampler<'a>>,
     aperture: A,
 }
 
-impl<A: Fn(f32, f32, f32) -> f32 + Sync> Shader<8> for EdgeShader<A> {
+impl<A: Fn(f32, f32, f32) -> f32 + Sync> Shader<8> for EdgeShader<'_, A> {
     type Rows = ();
 
     #[inline]
@@ -236,8 +242,10 @@ impl<A: Fn(f32, f32, f32) -> f32 + Sync> Shader<8> for EdgeShader<A> {
     /// The clip radius `a[5]` is affine along the row, and for the circle `u² + v²` is a
     /// quadratic: the pixels where the step is 0 (the radius beyond `1 + feather/2`) are
     /// left out, those where every factor is 1 (within `1 − feather/2`) take the open shade,
-    /// each up to [`SPLIT_MARGIN`]. An aperture other than the circle keeps the full shade on
-    /// flagged triangles.
+    /// each up to [`SPLIT_MARGIN`]. On a flagged triangle, another aperture's transmission is
+    /// traced along rows of `APERTURE_SPLIT_MIN_PIXELS` or more ([`aperture_split`]): the
+    /// pixels at the row's ends where it is 0 are left out, and the run where it is 1 takes
+    /// the open shade; shorter rows keep the full shade.
     fn split_row(&self, _: &(), a: &EdgeAttrs, step: &EdgeAttrs, n: usize) -> RowSplit {
         let f = f64::from(a[6]);
         let (outer, inner) = (1.0 + 0.5 * f + SPLIT_MARGIN, 1.0 - 0.5 * f - SPLIT_MARGIN);
@@ -262,7 +270,22 @@ impl<A: Fn(f32, f32, f32) -> f32 + Sync> Shader<8> for EdgeShader<A> {
                     };
                 }
             } else {
-                core = 0..0;
+                match self.sampler {
+                    Some(sampler) => {
+                        let uv = [f64::from(a[3]), f64::from(a[4])];
+                        let step_uv = [f64::from(step[3]), f64::from(step[4])];
+                        (lit, core) = aperture_split(
+                            &sampler,
+                            uv,
+                            step_uv,
+                            a[6],
+                            APERTURE_SPLIT_MARGIN,
+                            lit,
+                            core,
+                        );
+                    }
+                    _ => core = 0..0,
+                }
             }
         }
         RowSplit { lit, core }
@@ -340,6 +363,7 @@ mod tests {
             let step = [0.01, -0.02, 0.0, du, dv, dm, 0.0, 0.0];
             let circle = EdgeShader {
                 circle: true,
+                sampler: None,
                 aperture: |u: f32, v: f32, f: f32| {
                     smoothstep(0.5 * f, -0.5 * f, (u * u + v * v).sqrt() - 1.0)
                 },
@@ -349,9 +373,63 @@ mod tests {
             let sampler = iris.sampler();
             let general = EdgeShader {
                 circle: false,
+                sampler: Some(sampler),
                 aperture: |u, v, f| sampler.transmission_soft(u, v, f),
             };
             check_split(&general, a, step, n, flag == 0.0)?;
+            let mask = star_mask();
+            let sampler = mask.sampler();
+            let masked = EdgeShader {
+                circle: false,
+                sampler: Some(sampler),
+                aperture: |u, v, f| sampler.transmission_soft(u, v, f),
+            };
+            check_split(&masked, a, step, n, flag == 0.0)?;
+        }
+    }
+
+    /// A binary mask: a five-pointed star's opening (not convex), 128 texels a side.
+    fn star_mask() -> Aperture {
+        let size = 128;
+        let luma: Vec<u8> = (0..size * size)
+            .map(|i| {
+                let (col, row) = (i % size, i / size);
+                let u = -1.0 + (col as f64 + 0.5) * 2.0 / size as f64;
+                let v = 1.0 - (row as f64 + 0.5) * 2.0 / size as f64;
+                let r = 0.6 + 0.3 * (5.0 * v.atan2(u)).cos();
+                if u.hypot(v) < r { 255 } else { 0 }
+            })
+            .collect();
+        Aperture::Mask(crate::aperture::ApertureMask::from_luma(size, size, &luma).unwrap())
+    }
+
+    /// On a long row of a flagged triangle, an iris's or a mask's transmission is traced, not
+    /// taken pixel by pixel: a row crossing the opening from outside is dark up to near the
+    /// outline and takes the open shade well inside it, with the same image.
+    #[test]
+    fn a_long_row_is_split_by_an_iris_or_a_mask() {
+        let iris = Aperture::Iris {
+            blades: 6,
+            rotation_rad: 0.0,
+            roundness: 0.0,
+        };
+        for aperture in [iris, star_mask()] {
+            let sampler = aperture.sampler();
+            let shader = EdgeShader {
+                circle: false,
+                sampler: Some(sampler),
+                aperture: |u, v, f| sampler.transmission_soft(u, v, f),
+            };
+            // From u = 1.2 to 0 along v = 0.01, 0.01 a pixel; clip radius well open.
+            let n = 121;
+            let a = [1.0, 2.0, 3.0, 1.2, 0.01, 0.2, 0.004, 1.0];
+            let step = [0.0, 0.0, 0.0, -0.01, 0.0, 0.0, 0.0, 0.0];
+            let split = shader.split_row(&(), &a, &step, n);
+            // The outline near u = 1 (the iris's blade tip) or 0.9 (the star's point): dark
+            // before u = 1, open after u = 0.6.
+            assert!(split.lit.start >= 20, "{split:?}");
+            assert!(split.core.start <= 60 && split.core.end == n, "{split:?}");
+            check_split(&shader, a, step, n, false).unwrap();
         }
     }
 }

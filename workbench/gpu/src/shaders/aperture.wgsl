@@ -164,6 +164,33 @@ fn aperture_soft(u: f32, v: f32, feather: f32) -> f32 {
     }
 }
 
+// The signed distance to the opening's edge (negative inside): the CPU's
+// ApertureSampler::signed_distance.
+fn aperture_distance(u: f32, v: f32) -> f32 {
+    switch aperture.kind {
+        case 0u: {
+            return sqrt(u * u + v * v) - 1.0;
+        }
+        case 1u: {
+            return ap_iris_distance(u, v);
+        }
+        default: {
+            return ap_mask_distance(u, v);
+        }
+    }
+}
+
+// True where aperture_soft with `feather` is the feather's smoothstep of aperture_distance
+// (the CPU's ApertureSampler::soft_is_distance_ramp): the circle and the iris, a mask where
+// the feather is wider than a texel.
+fn aperture_is_distance_ramp(feather: f32) -> bool {
+    if aperture.kind < 2u {
+        return feather > 0.0;
+    }
+    let texel = max(2.0 / f32(aperture.mask_width), 2.0 / f32(aperture.mask_height));
+    return feather > texel;
+}
+
 // Where aperture_soft with `feather` is the same at every point within `radius` of (u, v): 1
 // wholly open, 0 wholly closed, −1 where it may vary (the CPU's
 // ApertureSampler::uniform_around: exact for the circle and the iris, conservative for a
@@ -190,7 +217,13 @@ fn aperture_uniform_around(u: f32, v: f32, radius: f32, feather: f32) -> f32 {
                 }
                 margin = 2.0 * radius + 4.0 * texel + 1e-5;
             } else {
-                margin = (aperture.mask_slope + 1.0) * radius + 0.5 * feather + 1e-5;
+                // The field's slope: its bound within the texel centres' square (the CPU's
+                // ApertureMask::slope_within), one more beyond.
+                let eu = 1.0 - 1.0 / f32(aperture.mask_width);
+                let ev = 1.0 - 1.0 / f32(aperture.mask_height);
+                let inside = abs(u) + radius <= eu && abs(v) + radius <= ev;
+                let slope = aperture.mask_slope + select(1.0, 0.0, inside);
+                margin = slope * radius + 0.5 * feather + 1e-5;
             }
         }
     }

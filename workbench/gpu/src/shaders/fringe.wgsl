@@ -391,6 +391,23 @@ fn fringe_shade(a: array<f32, 12>) -> vec3<f32> {
             return vec3<f32>(0.0);
         }
         if uniform < 0.0 {
+            // `aperture_as_clip`: with the clip open all along τ and the aperture's signed
+            // distance linear along the segment, its outline is shaded as the clip's edge.
+            let f = a[9];
+            let wholly = 1.0 - 0.5 * f;
+            if a[3] < wholly && a[3] + a[4] < wholly && aperture_is_distance_ramp(f) {
+                let d0 = aperture_distance(a[5], a[7]);
+                let dm = aperture_distance(a[5] + 0.5 * a[6], a[7] + 0.5 * a[8]);
+                let d1 = aperture_distance(a[5] + a[6], a[7] + a[8]);
+                if abs(d0 + d1 - 2.0 * dm) <= 2.0 * FRINGE_MAX_SAG * f {
+                    b[3] = 1.0 + d0;
+                    b[4] = d1 - d0;
+                    b[10] = 0.0;
+                    let s = fringe_open_share(b, base);
+                    fringe_branch = 14u;
+                    return vec3<f32>(a[0], a[1], a[2]) * s;
+                }
+            }
             fringe_branch = 13u;
             return vec3<f32>(a[0], a[1], a[2]) * fringe_stepped_between(a, base, 0.0, 1.0);
         }
