@@ -2,9 +2,10 @@
 //! [`crate::ghosts::render`] the workbench calls directly, behind
 //! [`export_plugin!`](flarebench_sdk::export_plugin). Parameters: `quality` (the preset),
 //! `bands` (wavelength bands, 0 for the preset's), `grid_scale` (0 for the preset's), the
-//! planner's thresholds `smooth_grid_scale`, `dim_budget`, `band_spacing`, `coarse_px` and
-//! `max_downscale` (each 0, or −1 for `dim_budget`, for the preset's), `reflections` ("2":
-//! two-reflection ghosts, the default; "4": four-reflection ghosts too).
+//! planner's thresholds `smooth_grid_scale`, `dim_budget`, `band_spacing`, `coarse_px`,
+//! `max_downscale` and `method_budget` (each 0, or −1 for `dim_budget` and `method_budget`, for
+//! the preset's), `reflections` ("2": two-reflection ghosts, the default; "4": four-reflection
+//! ghosts too).
 
 use flarebench_sdk::LensSystem;
 use flarebench_sdk::abi::author::{
@@ -75,6 +76,10 @@ pub fn plan_options(params: &Params<'_>) -> Result<PlanOptions<'static>, PluginE
     if let Some(d) = positive("max_downscale")? {
         opts.max_downscale = d.round() as usize;
     }
+    let method_budget = params.get("method_budget")?;
+    if method_budget >= 0.0 {
+        opts.method_error_budget = method_budget;
+    }
     opts.reflections = match params.get_choice("reflections")? {
         0 => ReflectionOrder::Two,
         _ => ReflectionOrder::Four,
@@ -144,6 +149,13 @@ impl FlarePlugin for GhostRaytrace {
                     0,
                     64,
                     0,
+                ),
+                ParamSpec::float(
+                    "method_budget",
+                    "relative RMSE the per-ghost choice of drawing method (meshed or splatted) may add to the frame (-1: the preset's 0.03/0/0; 0 meshes every ghost)",
+                    -1.0,
+                    1.0,
+                    -1.0,
                 ),
                 ParamSpec::choice(
                     "reflections",
