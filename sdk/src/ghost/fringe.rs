@@ -97,6 +97,11 @@ const WIDE_RAMP: f32 = 0.25;
 /// a wide end of the stop is integrated as linear in `τ`.
 pub const MAX_SAG: f32 = 0.01;
 
+/// Largest departure (in transmission, of the pixel's irradiance) of an aperture's
+/// transmission at the middle of a pixel's segment of stop crossings from its ends' mean for
+/// which it is integrated as linear along the segment ([`FringeShader::aperture_linear`]).
+pub const LINEAR_SAG: f32 = 1e-3;
+
 /// Steps over `τ` where the clip's and the stop's ends meet in the range, where the stop is
 /// grazed, or where an end's ramp is wide; and over the whole range where another aperture's
 /// outline is drawn ([`APERTURE_FLAG`]).
@@ -145,9 +150,10 @@ impl FringeShader<'_> {
     /// share alone; 0 where it is 0 there. Otherwise, where the clip is open all along `τ`
     /// and the transmission is the feather's smoothstep of a signed distance that is linear
     /// along the segment (its sag under [`MAX_SAG`] of a feather), that smoothstep is shaded
-    /// as the clip's would be ([`aperture_as_clip`]): three evaluations of the aperture.
-    /// Elsewhere, the clip's smoothstep times the aperture's transmission summed over
-    /// [`CORNER_STEPS`] steps of `τ`.
+    /// as the clip's would be ([`aperture_as_clip`]): three evaluations of the aperture; where
+    /// the clip is open and the transmission itself is linear along the segment, it is
+    /// integrated as such ([`FringeShader::aperture_linear`]). Elsewhere, the clip's
+    /// smoothstep times the aperture's transmission summed over [`CORNER_STEPS`] steps of `τ`.
     fn aperture_share(&self, a: &FringeAttrs) -> [f32; 3] {
         let (mu, mv) = (a[5] + 0.5 * a[6], a[7] + 0.5 * a[8]);
         let half = 0.5 * (a[6] * a[6] + a[8] * a[8]).sqrt();
@@ -160,9 +166,36 @@ impl FringeShader<'_> {
             }
             None => match aperture_as_clip(&self.aperture, a) {
                 Some(clip) => self.open_share(&clip),
-                None => self.aperture_stepped(a, CORNER_STEPS),
+                None => self
+                    .aperture_linear(a)
+                    .unwrap_or_else(|| self.aperture_stepped(a, CORNER_STEPS)),
             },
         }
+    }
+
+    /// The open share of a triangle flagged [`APERTURE_FLAG`] where the clip is open all along
+    /// `τ` and the aperture's soft transmission is linear along the pixel's segment of stop
+    /// crossings (its value at the middle within [`LINEAR_SAG`] of its ends' mean; a mask
+    /// sampled bilinearly under a feather of a texel, across a segment short against a
+    /// texel): `∫ (t0 + τ (t1 − t0)) dF = t0 + (t1 − t0)(1 − H(1))` per channel, `H` the
+    /// colour's integral ([`FringeTable::integral`]). `None` elsewhere.
+    fn aperture_linear(&self, a: &FringeAttrs) -> Option<[f32; 3]> {
+        let f = a[9];
+        let wholly = 1.0 - 0.5 * f;
+        if !(a[3] < wholly && a[3] + a[4] < wholly) {
+            return None;
+        }
+        let t = |s: f32| {
+            self.aperture
+                .transmission_soft(a[5] + s * a[6], a[7] + s * a[8], f)
+        };
+        let (t0, t_mid, t1) = (t(0.0), t(0.5), t(1.0));
+        let sag = (t0 + t1 - 2.0 * t_mid).abs();
+        if sag.is_nan() || sag > 2.0 * LINEAR_SAG {
+            return None;
+        }
+        let h = self.tables[a[11] as usize].integral(1.0);
+        Some(h.map(|h| t0 + (t1 - t0) * (1.0 - h)))
     }
 
     /// [`FringeShader::stepped_share`] of a triangle flagged [`APERTURE_FLAG`], the same sum
@@ -1446,6 +1479,38 @@ mod tests {
             }
             assert!(checked >= 2, "{aperture:?}: {checked}");
         }
+    }
+
+    /// A mask sampled bilinearly (a feather under its texel) across a segment of stop
+    /// crossings short against a texel: its transmission is linear along it, integrated as
+    /// such, within a fraction of a per cent of quadrature over 4096 steps.
+    #[test]
+    fn a_bilinear_mask_across_a_short_segment_is_integrated_as_linear() {
+        let tables = [table()];
+        let size = 64;
+        let luma: Vec<u8> = (0..size * size)
+            .map(|i| if (i % size) < 40 { 255 } else { 0 })
+            .collect();
+        let mask =
+            Aperture::Mask(crate::aperture::ApertureMask::from_luma(size, size, &luma).unwrap());
+        let shader = FringeShader {
+            tables: &tables,
+            aperture: mask.sampler(),
+        };
+        // The edge at u = 0.25 (column 40 of 64); a texel is 1/32 wide, the feather 0.01.
+        let mut checked = 0;
+        for u0 in [0.235_f32, 0.24, 0.245, 0.25, 0.255] {
+            let mut a = attrs([1.0; 3], [0.5, 0.02], [u0, 0.004], [0.1, 0.001], 0.01, true);
+            a[10] = APERTURE_FLAG;
+            if shader.aperture_linear(&a).is_some() {
+                checked += 1;
+                let (s, q) = (shader.open_share(&a), shader.stepped_share(&a, 4096));
+                for c in 0..3 {
+                    assert!((s[c] - q[c]).abs() < 0.003, "{u0}: {c}: {s:?} against {q:?}");
+                }
+            }
+        }
+        assert!(checked >= 3, "{checked}");
     }
 
     /// The fringe shader with no row split: every pixel of a sampled row shaded in full.

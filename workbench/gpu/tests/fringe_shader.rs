@@ -711,7 +711,8 @@ fn olf_mask() -> Aperture {
 
 /// Vectors flagged for an iris or a mask (`APERTURE_FLAG`): the random ones, flagged, and the
 /// GPU's stepped transmission (`aperture_soft` at each step of τ), its outline shaded as the
-/// clip's edge where the clip is open (`aperture_distance` at three points), and its decisions
+/// clip's edge or as a linear transmission where the clip is open (the aperture at three
+/// points), and its decisions
 /// where the whole segment is open or closed (`aperture_uniform_around`) against the CPU's.
 #[test]
 fn the_gpu_shades_iris_and_mask_fringes_as_the_cpu() {
@@ -736,10 +737,14 @@ fn the_gpu_shades_iris_and_mask_fringes_as_the_cpu() {
         let (m, branches) = compare(name, &tables, &attrs, &aperture);
         assert!(m.failures.is_empty(), "{name}: {:#?}", m.failures);
         let ways = ways(&branches);
-        // Stepped (13), the outline shaded as the clip's edge (14), closed along the segment
-        // (12), and open: the clip's own ways.
+        // Stepped (13), the outline shaded as the clip's edge (14) or as a linear
+        // transmission (15), closed along the segment (12), and open: the clip's own ways.
         assert!(
-            ways[13] >= 1000 && ways[14] >= 300 && ways[12] >= 100 && ways[9] + ways[11] >= 100,
+            ways[13] >= 1000
+                && ways[14] >= 300
+                && ways[15] >= 100
+                && ways[12] >= 100
+                && ways[9] + ways[11] >= 100,
             "{name}: {branches:?}"
         );
     }

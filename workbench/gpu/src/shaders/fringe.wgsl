@@ -32,6 +32,8 @@ const FRINGE_WIDE_RAMP: f32 = 0.25;
 /// Largest sag (in feathers) of the stop's radius below its chord for which a wide end of the
 /// stop is integrated as linear in τ.
 const FRINGE_MAX_SAG: f32 = 0.01;
+/// `fringe::LINEAR_SAG`.
+const FRINGE_LINEAR_SAG: f32 = 1e-3;
 /// Steps over τ where ends meet, the stop is grazed or an end's ramp is wide.
 const FRINGE_CORNER_STEPS: u32 = 16u;
 
@@ -406,6 +408,18 @@ fn fringe_shade(a: array<f32, 12>) -> vec3<f32> {
                     let s = fringe_open_share(b, base);
                     fringe_branch = 14u;
                     return vec3<f32>(a[0], a[1], a[2]) * s;
+                }
+            }
+            // `FringeShader::aperture_linear`: with the clip open along τ and the transmission
+            // itself linear along the segment, integrated as such.
+            if a[3] < wholly && a[3] + a[4] < wholly {
+                let t0 = aperture_soft(a[5], a[7], f);
+                let tm = aperture_soft(a[5] + 0.5 * a[6], a[7] + 0.5 * a[8], f);
+                let t1 = aperture_soft(a[5] + a[6], a[7] + a[8], f);
+                if abs(t0 + t1 - 2.0 * tm) <= 2.0 * FRINGE_LINEAR_SAG {
+                    let h = fringe_integral(base, 1.0);
+                    fringe_branch = 15u;
+                    return vec3<f32>(a[0], a[1], a[2]) * (vec3<f32>(t0) + (t1 - t0) * (vec3<f32>(1.0) - h));
                 }
             }
             fringe_branch = 13u;
