@@ -28,7 +28,7 @@ pub mod iris;
 use iris::IrisGeometry;
 mod mask;
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
 
 pub use mask::{ApertureMask, MAX_MASK_TEXELS, OLF_DISTANCE_CLIP, check_mask_size};
 

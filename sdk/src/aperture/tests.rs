@@ -294,16 +294,22 @@ fn validation_names_bad_iris_parameters_and_sampling_never_panics() {
 // ---- masks ----
 
 /// A `size`² mask of the unit circle, each texel open when its centre is inside.
-fn hard_circle(size: usize) -> ApertureMask {
+/// A binary mask of `size × size` texels, open at the texel centres `(u, v)` where `open`
+/// says so (the module's layout: row 0 at v = +1, column 0 at u = −1).
+pub(crate) fn mask_of(size: usize, open: impl Fn(f64, f64) -> bool) -> ApertureMask {
     let luma: Vec<u8> = (0..size * size)
         .map(|i| {
             let (row, col) = (i / size, i % size);
             let u = -1.0 + (col as f64 + 0.5) * 2.0 / size as f64;
             let v = 1.0 - (row as f64 + 0.5) * 2.0 / size as f64;
-            if u * u + v * v <= 1.0 { 255 } else { 0 }
+            if open(u, v) { 255 } else { 0 }
         })
         .collect();
     ApertureMask::from_luma(size, size, &luma).unwrap()
+}
+
+fn hard_circle(size: usize) -> ApertureMask {
+    mask_of(size, |u, v| u * u + v * v <= 1.0)
 }
 
 #[test]
@@ -462,10 +468,16 @@ fn closed_and_fully_open_masks_sample_without_trouble() {
 
 // ---- uniform around a point ----
 
-/// `uniform_around`'s answer checked on a dense sample of the disc it speaks for: where it
-/// says open (closed), the soft transmission is 1 (0) at every sample; returns how often it
-/// answered.
-fn check_uniform(aperture: &Aperture, feather: f32, seed: u64) -> usize {
+/// An answer about the disc of some radius around random points, checked on a dense sample of
+/// that disc (rings out to its whole radius, the rim included): `answer` gives the soft
+/// transmission it says holds all over the disc and the radius, or nothing; returns how
+/// often it answered.
+fn check_discs(
+    aperture: &Aperture,
+    feather: f32,
+    seed: u64,
+    answer: impl Fn(&ApertureSampler<'_>, f32, f32, f32) -> Option<(f32, f32)>,
+) -> usize {
     let sampler = aperture.sampler();
     let mut state = seed;
     let mut unit = || {
@@ -477,13 +489,12 @@ fn check_uniform(aperture: &Aperture, feather: f32, seed: u64) -> usize {
     let mut answered = 0;
     for _ in 0..3000 {
         let (u, v) = (2.4 * unit() - 1.2, 2.4 * unit() - 1.2);
-        let radius = 0.1 * unit() * unit();
-        let Some(t) = sampler.uniform_around(u, v, radius, feather) else {
+        let asked = 0.1 * unit() * unit();
+        let Some((t, radius)) = answer(&sampler, u, v, asked) else {
             continue;
         };
         answered += 1;
         for k in 0..200 {
-            // Rings out to the whole radius, the rim included.
             let r = radius * ((k % 10) as f32 + 1.0) / 10.0;
             let a = k as f32 * 0.7;
             let (x, y) = (u + r * a.cos(), v + r * a.sin());
@@ -495,6 +506,14 @@ fn check_uniform(aperture: &Aperture, feather: f32, seed: u64) -> usize {
         }
     }
     answered
+}
+
+/// `uniform_around`'s answer for random radii up to 0.1: where it says open (closed), the soft
+/// transmission is 1 (0) all over the disc.
+fn check_uniform(aperture: &Aperture, feather: f32, seed: u64) -> usize {
+    check_discs(aperture, feather, seed, |s, u, v, radius| {
+        s.uniform_around(u, v, radius, feather).map(|t| (t, radius))
+    })
 }
 
 #[test]
@@ -523,38 +542,14 @@ fn uniform_around_is_never_wrong() {
     assert_eq!(s.uniform_around(2.0, 0.0, 0.1, 0.01), Some(0.0));
 }
 
-/// `transmission_reach`'s answer checked on a dense sample of the disc of its reach: the soft
-/// transmission there is the one it gave; returns how often the reach was positive.
+/// `transmission_reach`'s answer: the transmission it gives is the soft transmission at the
+/// point, and the same all over the disc of its reach (where that is positive).
 fn check_reach(aperture: &Aperture, feather: f32, seed: u64) -> usize {
-    let sampler = aperture.sampler();
-    let mut state = seed;
-    let mut unit = || {
-        state = state
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (state >> 40) as f32 / (1u64 << 24) as f32
-    };
-    let mut reached = 0;
-    for _ in 0..3000 {
-        let (u, v) = (2.4 * unit() - 1.2, 2.4 * unit() - 1.2);
-        let (t, reach) = sampler.transmission_reach(u, v, feather);
-        assert_eq!(t, sampler.transmission_soft(u, v, feather), "({u}, {v})");
-        if reach <= 0.0 {
-            continue;
-        }
-        reached += 1;
-        for k in 0..200 {
-            let r = reach * ((k % 10) as f32 + 1.0) / 10.0;
-            let a = k as f32 * 0.7;
-            let (x, y) = (u + r * a.cos(), v + r * a.sin());
-            let s = sampler.transmission_soft(x, y, feather);
-            assert_eq!(
-                s, t,
-                "{aperture:?} feather {feather}: ({u}, {v}) reach {reach} said {t}, ({x}, {y}) has {s}"
-            );
-        }
-    }
-    reached
+    check_discs(aperture, feather, seed, |s, u, v, _| {
+        let (t, reach) = s.transmission_reach(u, v, feather);
+        assert_eq!(t, s.transmission_soft(u, v, feather), "({u}, {v})");
+        (reach > 0.0).then_some((t, reach))
+    })
 }
 
 #[test]

@@ -1176,6 +1176,7 @@ fn cross(a: [f64; 2], b: [f64; 2]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::aperture::tests::mask_of;
     use proptest::prelude::*;
 
     use crate::ghost::fringe_table::NODES;
@@ -1439,18 +1440,7 @@ mod tests {
     #[test]
     fn an_outline_with_the_clip_open_is_shaded_as_the_clip_s_edge() {
         let tables = [table()];
-        let mask = {
-            let size = 64;
-            let luma: Vec<u8> = (0..size * size)
-                .map(|i| {
-                    let (col, row) = (i % size, i / size);
-                    let u = -1.0 + (col as f64 + 0.5) * 2.0 / size as f64;
-                    let v = 1.0 - (row as f64 + 0.5) * 2.0 / size as f64;
-                    if u < 0.3 + 0.2 * v { 255 } else { 0 }
-                })
-                .collect();
-            Aperture::Mask(crate::aperture::ApertureMask::from_luma(size, size, &luma).unwrap())
-        };
+        let mask = Aperture::Mask(mask_of(64, |u, v| u < 0.3 + 0.2 * v));
         for aperture in [IRIS.clone(), mask] {
             let shader = FringeShader {
                 tables: &tables,
@@ -1487,12 +1477,8 @@ mod tests {
     #[test]
     fn a_bilinear_mask_across_a_short_segment_is_integrated_as_linear() {
         let tables = [table()];
-        let size = 64;
-        let luma: Vec<u8> = (0..size * size)
-            .map(|i| if (i % size) < 40 { 255 } else { 0 })
-            .collect();
-        let mask =
-            Aperture::Mask(crate::aperture::ApertureMask::from_luma(size, size, &luma).unwrap());
+        // Columns 0 to 39 of 64 open.
+        let mask = Aperture::Mask(mask_of(64, |u, _| u < 0.25));
         let shader = FringeShader {
             tables: &tables,
             aperture: mask.sampler(),
@@ -1506,7 +1492,10 @@ mod tests {
                 checked += 1;
                 let (s, q) = (shader.open_share(&a), shader.stepped_share(&a, 4096));
                 for c in 0..3 {
-                    assert!((s[c] - q[c]).abs() < 0.003, "{u0}: {c}: {s:?} against {q:?}");
+                    assert!(
+                        (s[c] - q[c]).abs() < 0.003,
+                        "{u0}: {c}: {s:?} against {q:?}"
+                    );
                 }
             }
         }

@@ -390,17 +390,9 @@ mod tests {
 
     /// A binary mask: a five-pointed star's opening (not convex), 128 texels a side.
     fn star_mask() -> Aperture {
-        let size = 128;
-        let luma: Vec<u8> = (0..size * size)
-            .map(|i| {
-                let (col, row) = (i % size, i / size);
-                let u = -1.0 + (col as f64 + 0.5) * 2.0 / size as f64;
-                let v = 1.0 - (row as f64 + 0.5) * 2.0 / size as f64;
-                let r = 0.6 + 0.3 * (5.0 * v.atan2(u)).cos();
-                if u.hypot(v) < r { 255 } else { 0 }
-            })
-            .collect();
-        Aperture::Mask(crate::aperture::ApertureMask::from_luma(size, size, &luma).unwrap())
+        Aperture::Mask(crate::aperture::tests::mask_of(128, |u, v| {
+            u.hypot(v) < 0.6 + 0.3 * (5.0 * v.atan2(u)).cos()
+        }))
     }
 
     /// On a long row of a flagged triangle, an iris's or a mask's transmission is traced, not
