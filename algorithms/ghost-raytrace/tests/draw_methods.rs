@@ -92,7 +92,12 @@ fn a_splatted_ghost_keeps_its_energy_and_agrees_with_the_reference_within_its_pr
         &lights,
         &PlanOptions::for_quality(Quality::Default, None),
     );
-    let reference = reference_plans(&sys, &lights, &frame, 1.0)
+    // The reference at half its grid density (still five times the preset's grid): its
+    // errors of these ghosts meshed and splatted are within 0.001 of the full reference's
+    // (2026-12-07: 9-7 0.0073 / 0.0088 against 0.0067 / 0.0079; 7-0 0.0157 / 0.0213 against
+    // 0.0158 / 0.0212; 15-7 0.0227 / 0.0238 against 0.0226 / 0.0238), in a quarter of the
+    // time (the folded 9-7 alone took 19 s at full density in the debug build).
+    let reference = reference_plans(&sys, &lights, &frame, 0.5)
         .unwrap()
         .remove(0);
     // The brightest ghosts whose triangles land smaller than a splat's: where it is chosen.
