@@ -259,9 +259,7 @@ impl ApertureMask {
             let slope = f64::from(self.lipschitz);
             // Within the texel centres' square, the field's slope is `lipschitz`
             // (`slope_within`).
-            let (eu, ev) = (1.0 - 0.5 * tu, 1.0 - 0.5 * tv);
-            let to_centres_edge = f64::from((eu - u.abs()).min(ev - v.abs()));
-            let reach = (room / (slope + 1.0)).max((room / slope).min(to_centres_edge));
+            let reach = (room / (slope + 1.0)).max((room / slope).min(self.to_centres_edge(u, v)));
             (t, reach)
         };
         (t, if reach > 0.0 { reach as f32 } else { 0.0 })
@@ -271,10 +269,16 @@ impl ApertureMask {
     /// that disc lies within the square of the outermost texel centres (the bilinear field's
     /// own slope), `lipschitz + 1` elsewhere (the distance beyond them added).
     fn slope_within(&self, u: f32, v: f32, radius: f64) -> f64 {
+        let inside = radius <= self.to_centres_edge(u, v);
+        f64::from(self.lipschitz) + if inside { 0.0 } else { 1.0 }
+    }
+
+    /// The distance from `(u, v)` to the edge of the square of the outermost texel centres
+    /// (negative outside it).
+    fn to_centres_edge(&self, u: f32, v: f32) -> f64 {
         let (tu, tv) = self.texel_size();
         let (eu, ev) = (1.0 - 0.5 * f64::from(tu), 1.0 - 0.5 * f64::from(tv));
-        let inside = f64::from(u).abs() + radius <= eu && f64::from(v).abs() + radius <= ev;
-        f64::from(self.lipschitz) + if inside { 0.0 } else { 1.0 }
+        (eu - f64::from(u).abs()).min(ev - f64::from(v).abs())
     }
 
     /// `Σ T × texel area`: the exact integral of the bilinear transmission (module docs).

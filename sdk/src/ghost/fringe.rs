@@ -181,8 +181,7 @@ impl FringeShader<'_> {
     /// colour's integral ([`FringeTable::integral`]). `None` elsewhere.
     fn aperture_linear(&self, a: &FringeAttrs) -> Option<[f32; 3]> {
         let f = a[9];
-        let wholly = 1.0 - 0.5 * f;
-        if !(a[3] < wholly && a[3] + a[4] < wholly) {
+        if !clip_open_along_tau(a) {
             return None;
         }
         let t = |s: f32| {
@@ -317,7 +316,7 @@ impl FringeShader<'_> {
         // within the feather at both ends).
         let (r0, r1) = (a[3], a[4]);
         let wholly = 1.0 - 0.5 * full;
-        let clip_open = r0 < wholly && r0 + r1 < wholly;
+        let clip_open = clip_open_along_tau(a);
         if !clip_open && r1.abs() < 1e-9 {
             factor *= still(r0);
         } else if !clip_open {
@@ -597,6 +596,14 @@ impl Shader<12> for FringeShader<'_> {
     }
 }
 
+/// True when the clip radius `r0 + τ r1` (attributes 3 and 4) is within `1 − feather/2` at
+/// both ends of `τ ∈ [0, 1]`, so wholly open at every `τ` (it is linear in `τ`).
+#[inline]
+fn clip_open_along_tau(a: &FringeAttrs) -> bool {
+    let wholly = 1.0 - 0.5 * a[9];
+    a[3] < wholly && a[3] + a[4] < wholly
+}
+
 /// A triangle's attributes `a` flagged [`APERTURE_FLAG`] with the aperture's outline put in
 /// the clip's place, where that is exact: where the clip is open all along `τ` (its radius
 /// within `1 − feather/2` at both ends) and the aperture's soft transmission is the
@@ -606,8 +613,7 @@ impl Shader<12> for FringeShader<'_> {
 /// transmission over `τ` is the clip's smoothstep of the radius `1 + d(τ)`. `None` elsewhere.
 fn aperture_as_clip(aperture: &ApertureSampler<'_>, a: &FringeAttrs) -> Option<FringeAttrs> {
     let f = a[9];
-    let wholly = 1.0 - 0.5 * f;
-    if !(a[3] < wholly && a[3] + a[4] < wholly && aperture.soft_is_distance_ramp(f)) {
+    if !(clip_open_along_tau(a) && aperture.soft_is_distance_ramp(f)) {
         return None;
     }
     let d = |t: f32| aperture.signed_distance(a[5] + t * a[6], a[7] + t * a[8]);
