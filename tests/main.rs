@@ -4,6 +4,7 @@
 //!
 //! Run one file's tests by its module path: `cargo test -p flarebench-tests --test workspace source_focal_lengths::`.
 
+mod build_features;
 mod flaresim_render;
 mod oracle;
 mod plugin_host;
