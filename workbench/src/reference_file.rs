@@ -9,7 +9,9 @@
 //! `$XDG_CACHE_HOME/flarebench/references`, or `~/.cache/…`; [`CACHE_ENV`] names another, or,
 //! set empty, turns it off), one file per scene named by the FNV-1a hash of its key, and read
 //! back while the scene stays the same: the second `render --reference` or `compare` of a
-//! scene does not render the reference again. A cached file that cannot be read or holds
+//! scene does not render the reference again. A reference rendered for a `--reference-file`
+//! is kept in the cache too, and a `--reference-file` that does not exist yet is written from
+//! the cache when it holds the scene. A cached file that cannot be read or holds
 //! another key is rendered over; a cache that cannot be written is passed over with a
 //! warning.
 
@@ -82,6 +84,8 @@ pub enum ReferenceSource {
     Read(PathBuf),
     /// Read from this file of the cache ([`cache_dir`]).
     Cached(PathBuf),
+    /// Read from the cache and written to the `--reference-file` that did not exist yet.
+    CachedSaved { cache: PathBuf, file: PathBuf },
     /// Rendered now and kept in this file of the cache.
     CachedNow(PathBuf),
 }
@@ -93,15 +97,21 @@ impl std::fmt::Display for ReferenceSource {
             ReferenceSource::Saved(p) => write!(f, "rendered and saved to {}", p.display()),
             ReferenceSource::Read(p) => write!(f, "read from {}", p.display()),
             ReferenceSource::Cached(p) => write!(f, "read from the cache ({})", p.display()),
+            ReferenceSource::CachedSaved { cache, file } => write!(
+                f,
+                "read from the cache ({}) and saved to {}",
+                cache.display(),
+                file.display()
+            ),
             ReferenceSource::CachedNow(p) => write!(f, "rendered and cached ({})", p.display()),
         }
     }
 }
 
 /// The reference image of the scene (its ghosts of `reflections`): read from `file` when it
-/// exists (and was made for this scene — else an error naming both keys), otherwise rendered
-/// and, with `file`, written there. Without `file`, read from the cache when it holds this
-/// scene, else rendered and kept there ([`cache_dir`]; the module's docs).
+/// exists (and was made for this scene — else an error naming both keys); otherwise read from
+/// the cache when it holds this scene, else rendered and kept there ([`cache_dir`]; the
+/// module's docs), and, with `file`, written to `file` as well.
 pub fn reference_for(
     system: &LensSystem,
     aperture: &Aperture,
@@ -138,41 +148,57 @@ pub fn reference_for(
         }
         return Ok((img, ReferenceSource::Read(path.to_path_buf())));
     }
-    let cached = match file {
-        Some(_) => None,
-        None => cache_file(&key),
-    };
-    if let Some(path) = &cached
-        && let Ok((img, text)) = read_exr_with_attributes(path)
+    let cached = cache_file(&key);
+    if let Some(cache) = &cached
+        && let Ok((img, text)) = read_exr_with_attributes(cache)
         && text.get(KEY_ATTRIBUTE) == Some(&key)
         && (img.width, img.height) == (frame.width, frame.height)
     {
-        return Ok((img, ReferenceSource::Cached(path.clone())));
+        let Some(path) = file else {
+            return Ok((img, ReferenceSource::Cached(cache.clone())));
+        };
+        save(&img, &key, path)?;
+        return Ok((
+            img,
+            ReferenceSource::CachedSaved {
+                cache: cache.clone(),
+                file: path.to_path_buf(),
+            },
+        ));
     }
     let img = reference_image_of_order(system, aperture, frame, lights, reflections)?;
-    let Some(path) = file else {
-        let Some(path) = cached else {
-            return Ok((img, ReferenceSource::Rendered));
-        };
-        let kept = encode_exr_with(&img, &[(KEY_ATTRIBUTE, &key)]).and_then(|bytes| {
-            if let Some(dir) = path.parent() {
+    let kept = cached.and_then(|cache| {
+        let bytes = encode_exr_with(&img, &[(KEY_ATTRIBUTE, &key)]).and_then(|bytes| {
+            if let Some(dir) = cache.parent() {
                 std::fs::create_dir_all(dir)?;
             }
-            Ok(write_atomically(&path, &bytes)?)
+            Ok(write_atomically(&cache, &bytes)?)
         });
-        return Ok(match kept {
-            Ok(()) => (img, ReferenceSource::CachedNow(path)),
+        match bytes {
+            Ok(()) => Some(cache),
             Err(e) => {
                 eprintln!(
                     "warning: could not keep the reference in the cache `{}` ({e:#}); set {CACHE_ENV} to another directory, or empty to turn the cache off",
-                    path.display()
+                    cache.display()
                 );
-                (img, ReferenceSource::Rendered)
+                None
             }
-        });
+        }
+    });
+    let source = match (file, kept) {
+        (Some(path), _) => {
+            save(&img, &key, path)?;
+            ReferenceSource::Saved(path.to_path_buf())
+        }
+        (None, Some(cache)) => ReferenceSource::CachedNow(cache),
+        (None, None) => ReferenceSource::Rendered,
     };
-    let bytes = encode_exr_with(&img, &[(KEY_ATTRIBUTE, &key)])?;
+    Ok((img, source))
+}
+
+/// Writes a reference image with its scene's key to `path` (`--reference-file`).
+fn save(img: &HdrImage, key: &str, path: &Path) -> Result<()> {
+    let bytes = encode_exr_with(img, &[(KEY_ATTRIBUTE, key)])?;
     write_atomically(path, &bytes)
-        .with_context(|| format!("could not write the reference to `{}`", path.display()))?;
-    Ok((img, ReferenceSource::Saved(path.to_path_buf())))
+        .with_context(|| format!("could not write the reference to `{}`", path.display()))
 }

@@ -835,7 +835,7 @@ fn the_reference_is_cached_per_scene_and_a_damaged_file_rendered_over() {
     let dir = tmp.path();
     // The Lensbaby (two elements): its reference takes seconds.
     let cache = dir.join("cache");
-    let run = |cache: &std::path::Path, json: bool| {
+    let run_with = |cache: &std::path::Path, json: bool, reference: &[&str]| {
         let mut c = common::command();
         c.args([
             "render",
@@ -844,10 +844,10 @@ fn the_reference_is_cached_per_scene_and_a_damaged_file_rendered_over() {
             "2,0",
             "--size",
             "64x36",
-            "--reference",
             "-o",
             dir.join("out.exr").to_str().unwrap(),
         ])
+        .args(reference)
         .env("FLAREBENCH_REFERENCE_CACHE", cache)
         .env("XDG_CACHE_HOME", dir.join("xdg"));
         c.arg(if json { "--json" } else { "--report" });
@@ -859,6 +859,7 @@ fn the_reference_is_cached_per_scene_and_a_damaged_file_rendered_over() {
         );
         out
     };
+    let run = |cache: &std::path::Path, json: bool| run_with(cache, json, &["--reference"]);
     let files = |d: &std::path::Path| -> Vec<std::path::PathBuf> {
         std::fs::read_dir(d)
             .map(|r| r.map(|e| e.unwrap().path()).collect())
@@ -889,4 +890,26 @@ fn the_reference_is_cached_per_scene_and_a_damaged_file_rendered_over() {
     let _ = run(std::path::Path::new(""), true);
     assert!(files(&dir.join("xdg")).is_empty());
     assert_eq!(files(&cache).len(), 1);
+
+    // A `--reference-file` that does not exist yet is written from the cache, not rendered…
+    let file = dir.join("saved.exr");
+    let saved = run_with(&cache, false, &["--reference-file", file.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&saved.stderr);
+    assert!(
+        err.contains("reference read from the cache") && err.contains("and saved to"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read(&file).unwrap(), bytes);
+    // …and one rendered for a file is kept in the cache too.
+    let other_cache = dir.join("cache2");
+    std::fs::remove_file(&file).unwrap();
+    let rendered = run_with(
+        &other_cache,
+        false,
+        &["--reference-file", file.to_str().unwrap()],
+    );
+    let err = String::from_utf8_lossy(&rendered.stderr);
+    assert!(err.contains("reference rendered and saved to"), "{err}");
+    assert_eq!(files(&other_cache).len(), 1);
+    assert_eq!(std::fs::read(&files(&other_cache)[0]).unwrap(), bytes);
 }
