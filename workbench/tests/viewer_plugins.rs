@@ -53,15 +53,16 @@ fn options() -> ViewerOptions {
 /// What `compare` renders with the library at `path` (default parameters) on the CPU backend,
 /// for the viewer's scene: `GhostBackend::render_plugin`, as `compare` calls it.
 fn compare_render(path: &Path, lens: &LensSystem, light: &LightSpec) -> HdrImage {
-    compare_render_on(BackendChoice::Cpu, path, lens, light)
+    compare_render_on(BackendChoice::Cpu, path, lens, light, SIZE)
 }
 
-/// [`compare_render`] on `backend`.
+/// [`compare_render`] on `backend`, `size` pixels.
 fn compare_render_on(
     backend: BackendChoice,
     path: &Path,
     lens: &LensSystem,
     light: &LightSpec,
+    size: (usize, usize),
 ) -> HdrImage {
     let plugin = host::load(path).unwrap();
     let values = parse_values(&plugin.params, "").unwrap();
@@ -69,7 +70,7 @@ fn compare_render_on(
     inst.prepare(lens).unwrap();
     let scene = Scene {
         lights: vec![light.scene_light()],
-        frame: view_frame(lens, SIZE.0, SIZE.1),
+        frame: view_frame(lens, size.0, size.1),
         aperture: Aperture::Circular,
     };
     let mut backend = GhostBackend::open(backend).unwrap();
@@ -274,9 +275,13 @@ const GPU_CPU_MAX_ENERGY: f64 = 0.001;
 fn on_the_gpu_a_plugins_preview_is_compares_gpu_image_its_own_pixels_kept() {
     let matrix = plugin_library("ghost_matrix");
     let glow = plugin_library("example_glow");
+    // A quarter of the other tests' frame: lavapipe shades the matrix ghosts' frame-wide
+    // triangles one fragment at a time.
+    let size = (SIZE.0 / 2, SIZE.1 / 2);
     let (mut viewer, _notes) = viewer_on(
         ViewerOptions {
             backend: BackendChoice::Gpu,
+            size,
             // Near the axis: the starburst lands in the frame.
             lights: vec![LightSpec::parse("3,40").unwrap()],
             ..options()
@@ -298,8 +303,8 @@ fn on_the_gpu_a_plugins_preview_is_compares_gpu_image_its_own_pixels_kept() {
             "A goes to the next plugin"
         );
         let light = viewer.scene().lights[0].clone();
-        let gpu = compare_render_on(BackendChoice::Gpu, lib, viewer.system(), &light);
-        let cpu = compare_render(lib, viewer.system(), &light);
+        let gpu = compare_render_on(BackendChoice::Gpu, lib, viewer.system(), &light, size);
+        let cpu = compare_render_on(BackendChoice::Cpu, lib, viewer.system(), &light, size);
         assert!(
             f.hdr.pixels == gpu.pixels,
             "{}: not compare's GPU image",
