@@ -15,6 +15,7 @@
 //! - [`image`] and [`raster`]: linear HDR images and the exact-coverage CPU triangle rasterizer.
 //! - [`frame`]: the output image's pixels ↔ the part of the sensor it shows ([`Frame`]).
 //! - [`spectrum`]: the d, F and C line wavelengths.
+//! - [`lens_kind`]: what kind of lens a prescription is (prime, zoom, fisheye, …), for finding it.
 //! - [`rect`], [`ghost_path`] and [`fingerprint`]: the rectangle, the ghost path and the lens
 //!   fingerprint, shared by `trace`, `io` and `ghost` so that neither of the first two depends on
 //!   `ghost` (the layers are in `tests/layering.rs`).
@@ -42,6 +43,7 @@ pub mod glass;
 pub mod hash;
 pub mod image;
 pub mod io;
+pub mod lens_kind;
 pub mod paraxial;
 pub mod raster;
 pub mod rect;
@@ -52,4 +54,5 @@ pub mod trace;
 
 pub use frame::Frame;
 pub use glass::{Dispersion, GlassCatalog};
+pub use lens_kind::LensKind;
 pub use system::{Coating, LensSystem, Medium, Surface, SurfaceKind};

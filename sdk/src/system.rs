@@ -1,6 +1,7 @@
 //! The lens prescription model: surfaces front (object side) to sensor, and their validation.
 
 use crate::glass::Dispersion;
+use crate::lens_kind::LensKind;
 use crate::spectrum::LAMBDA_D_NM;
 
 pub use crate::coating::{Coating, CoatingLayer};
@@ -191,6 +192,14 @@ pub fn curvature_from_radius(radius: f64) -> f64 {
 #[derive(Clone, Debug, PartialEq)]
 pub struct LensSystem {
     pub name: String,
+    /// Who made the lens (`Nikon`, `Carl Zeiss`), for finding it; empty when not known.
+    pub maker: String,
+    /// What kind of lens it is (prime or zoom, fisheye, macro, …), sorted; empty when not known.
+    pub kind: Vec<LensKind>,
+    /// The focal length the maker names the lens by (mm): shortest and longest for a zoom,
+    /// the same twice for a prime. The prescription's own is `stated_efl_mm` (a zoom's is one
+    /// position of its range; a patent's often differs from the marketed one by a few %).
+    pub nominal_focal_mm: Option<[f64; 2]>,
     /// The aperture setting: the stop is closed down so the paraxial f-number is at least this;
     /// `None` uses the stop's full semi-diameter.
     pub f_number: Option<f64>,
@@ -235,6 +244,9 @@ impl LensSystem {
     pub fn new(name: &str, surfaces: Vec<Surface>) -> Self {
         LensSystem {
             name: name.to_string(),
+            maker: String::new(),
+            kind: Vec::new(),
+            nominal_focal_mm: None,
             f_number: None,
             stated_efl_mm: None,
             field_of_view_deg: None,

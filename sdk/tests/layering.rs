@@ -18,6 +18,7 @@ const LAYERS: &[&[&str]] = &[
         "ghost_path",
         "color",
         "aperture",
+        "lens_kind",
     ],
     // Images, glasses, bare interfaces.
     &["image", "glass", "fresnel"],

@@ -1,4 +1,7 @@
-//! Finding lens files: a path, or the name of a lens in the bundled library (`lenses/`).
+//! Finding lens files: a path, or the name of a lens in the bundled library (`lenses/` and its
+//! maker folders), matched by [`names`].
+
+pub mod names;
 
 use std::path::{Path, PathBuf};
 
@@ -30,7 +33,10 @@ pub fn library_dirs() -> Vec<PathBuf> {
     dirs.into_iter().filter(|d| d.is_dir()).collect()
 }
 
-/// The path of `spec`: an existing file, or a bundled lens name such as `heliar-tronnier`.
+/// The path of `spec`: an existing file, or a bundled lens named by its file stem
+/// (`heliar-tronnier`, `ai-nikkor-135mm-f2`), by `maker/stem` (`nikon/ai-nikkor-135mm-f2`),
+/// or by a unique prefix or substring of one ([`names::find`]): an ambiguous name is an error
+/// listing the candidates, an unknown one suggests the nearest names.
 pub fn resolve(spec: &str) -> anyhow::Result<PathBuf> {
     let direct = Path::new(spec);
     if direct.is_file() {
@@ -49,33 +55,140 @@ pub fn resolve(spec: &str) -> anyhow::Result<PathBuf> {
             }
         }
     }
-    let names = bundled_names();
-    if names.is_empty() {
+    let lenses = bundled();
+    if lenses.is_empty() {
         bail!("no lens file `{spec}` (and no bundled lens library was found)");
     }
-    bail!(
-        "no lens file `{spec}`; bundled lenses: {}",
-        names.join(", ")
-    )
+    match names::find(spec, &lenses) {
+        names::Found::One(i) => Ok(lenses[i].path.clone()),
+        names::Found::Ambiguous(how, candidates) => {
+            let shown: Vec<&str> = candidates
+                .iter()
+                .take(names::MAX_LISTED)
+                .map(|&i| lenses[i].qualified.as_str())
+                .collect();
+            let more = match candidates.len().saturating_sub(names::MAX_LISTED) {
+                0 => String::new(),
+                n => format!(", … and {n} more (`flarebench lenses {spec}` lists them all)"),
+            };
+            bail!(
+                "no lens file `{spec}`, and the name is ambiguous: it is {how} of {} bundled \
+                 lenses ({}{more}); give more of the name",
+                candidates.len(),
+                shown.join(", ")
+            )
+        }
+        names::Found::None(near) if near.is_empty() => bail!(
+            "no lens file `{spec}`, and no bundled lens has a name like it (`flarebench \
+             lenses` lists the {} bundled lenses)",
+            lenses.len()
+        ),
+        names::Found::None(near) => {
+            let near: Vec<&str> = near.iter().map(|&i| lenses[i].name.as_str()).collect();
+            bail!(
+                "no lens file `{spec}`, and no bundled lens of that name; did you mean {}? \
+                 (`flarebench lenses` lists the {} bundled lenses)",
+                near.join(", "),
+                lenses.len()
+            )
+        }
+    }
 }
 
-/// Names of the bundled lenses (file stems), sorted.
-pub fn bundled_names() -> Vec<String> {
-    let mut names: Vec<String> = library_dirs()
-        .iter()
-        .take(1)
-        .flat_map(|d| std::fs::read_dir(d).into_iter().flatten().flatten())
-        .filter_map(|e| {
-            let p = e.path();
+/// One lens of the bundled library.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct BundledLens {
+    /// Its name: the file stem (unique across the library).
+    pub name: String,
+    /// `maker/stem` for a lens in a maker folder, else the stem.
+    pub qualified: String,
+    /// The maker folder (`nikon`), `None` for the lenses at the top of `lenses/`.
+    pub folder: Option<String>,
+    pub path: PathBuf,
+}
+
+/// Folders of `lenses/` that hold no lenses.
+const NOT_LENS_FOLDERS: &[&str] = &["sources", "masks"];
+
+/// The lens files directly in `dir`, sorted by name.
+fn lens_files(dir: &Path) -> Vec<(String, PathBuf)> {
+    let mut files: Vec<(String, PathBuf)> = std::fs::read_dir(dir)
+        .into_iter()
+        .flatten()
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.is_file())
+        .filter_map(|p| {
             let ext = p.extension()?.to_str()?;
-            EXTENSIONS
-                .contains(&ext)
-                .then(|| p.file_stem()?.to_str().map(str::to_string))?
+            let stem = p.file_stem()?.to_str()?.to_string();
+            EXTENSIONS.contains(&ext).then_some((stem, p))
         })
         .collect();
-    names.sort();
+    files.sort();
+    files
+}
+
+/// The bundled library: the lenses at the top of the first library directory (the ones
+/// `convert.py` writes) and those in its maker folders (`nikon/`, `canon/`, …; not `sources/`
+/// or `masks/`), sorted by name.
+pub fn bundled() -> Vec<BundledLens> {
+    let Some(root) = library_dirs().into_iter().next() else {
+        return Vec::new();
+    };
+    let mut out: Vec<BundledLens> = lens_files(&root)
+        .into_iter()
+        .map(|(name, path)| BundledLens {
+            qualified: name.clone(),
+            name,
+            folder: None,
+            path,
+        })
+        .collect();
+    let mut folders: Vec<PathBuf> = std::fs::read_dir(&root)
+        .into_iter()
+        .flatten()
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.is_dir())
+        .filter(|p| {
+            p.file_name()
+                .and_then(|n| n.to_str())
+                .is_some_and(|n| !NOT_LENS_FOLDERS.contains(&n))
+        })
+        .collect();
+    folders.sort();
+    for folder in folders {
+        let Some(maker) = folder.file_name().and_then(|n| n.to_str()) else {
+            continue;
+        };
+        for (name, path) in lens_files(&folder) {
+            out.push(BundledLens {
+                qualified: format!("{maker}/{name}"),
+                name,
+                folder: Some(maker.to_string()),
+                path,
+            });
+        }
+    }
+    out.sort_by(|a, b| a.name.cmp(&b.name).then(a.qualified.cmp(&b.qualified)));
+    out
+}
+
+/// Names of the bundled lenses (file stems), sorted: the whole library.
+pub fn bundled_names() -> Vec<String> {
+    let mut names: Vec<String> = bundled().into_iter().map(|l| l.name).collect();
     names.dedup();
     names
+}
+
+/// Names of the lenses at the top of `lenses/` (the 19 `convert.py` writes, which the tests
+/// and docs name), sorted: what `stability` checks when given no lens.
+pub fn core_names() -> Vec<String> {
+    bundled()
+        .into_iter()
+        .filter(|l| l.folder.is_none())
+        .map(|l| l.name)
+        .collect()
 }
 
 /// How to read lens files that leave a choice open: shared by every command that loads a lens

@@ -5,6 +5,7 @@
 pub mod algo_spec;
 pub mod aperture_file;
 pub mod cli;
+pub mod curation;
 pub mod document;
 #[cfg(feature = "tui")]
 pub mod edit;
@@ -14,6 +15,7 @@ pub mod input_image;
 pub mod label;
 pub mod lens_drawing;
 pub mod lens_library;
+pub mod lens_listing;
 pub mod link;
 pub mod output;
 pub mod panics;

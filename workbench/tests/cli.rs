@@ -167,12 +167,12 @@ fn a_bad_file_gives_file_line_and_field_and_no_panic() {
 }
 
 #[test]
-fn an_unknown_lens_lists_the_library() {
+fn an_unknown_lens_points_to_the_listing_of_the_library() {
     let out = flarebench(&["info", "no-such-lens"]);
     assert!(!out.status.success());
     let err = String::from_utf8(out.stderr).unwrap();
     assert!(
-        err.contains("no lens file `no-such-lens`") && err.contains("heliar-tronnier"),
+        err.contains("no lens file `no-such-lens`") && err.contains("`flarebench lenses` lists"),
         "{err}"
     );
 }

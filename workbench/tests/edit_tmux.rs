@@ -146,8 +146,9 @@ fn without_a_terminal_or_a_lens_the_errors_are_clear() {
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
-        err.contains("could not open lens `no-such-lens`") && err.contains("heliar-tronnier"),
-        "names the bundled lenses: {err}"
+        err.contains("could not open lens `no-such-lens`")
+            && err.contains("`flarebench lenses` lists"),
+        "points to the listing of the bundled lenses: {err}"
     );
 }
 

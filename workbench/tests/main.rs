@@ -22,6 +22,7 @@ mod edit_tmux;
 mod golden;
 mod gpu;
 mod lens_drawing;
+mod lens_library;
 mod plugin_loop;
 mod plugins;
 mod readme;

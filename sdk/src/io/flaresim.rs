@@ -33,6 +33,7 @@ use clearance::round;
 use convention::{Evidence, Reading};
 use table::{ABBE, COATING, COLUMNS, IOR, RADIUS, Radius, Row, SEMI_AP, THICKNESS, Table};
 
+pub use coating::stack as coating_stack;
 pub use convention::LensApertureConvention;
 
 /// Film size given to `.lens` lenses (full-frame 35 mm), as for the other formats.

@@ -20,7 +20,7 @@ use std::path::Path;
 
 pub use atomic::{save_xml, write_atomically};
 pub use error::LensFileError;
-pub use flaresim::{LensApertureConvention, parse_flaresim};
+pub use flaresim::{LensApertureConvention, coating_stack as flaresim_coating, parse_flaresim};
 pub use olf_bounds::{
     OlfAngleEntry, OlfGhostBounds, OlfGhostEntry, OlfRect, parse_olf_bounds, read_olf_bounds,
 };

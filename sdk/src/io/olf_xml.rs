@@ -4,7 +4,7 @@
 //! semi-diameter, `radius` 0 is flat, `refractiveIndex`/`abbeNumber` describe the medium after
 //! the surface (n = 1 is air), `coatingLambda`/`coatingIor` of 0 mean no coating. Our files add
 //! optional tags (`curvature`, `conic`, `aspheric`, `glass`, `coatingStack`, `notes`,
-//! `source`); see [`write_xml`].
+//! `source`, and the catalogue's `maker`, `kind`, `nominalFocalLength`); see [`write_xml`].
 
 mod coating;
 mod fields;
@@ -29,6 +29,9 @@ mod tags {
     pub const LAYER: &str = "layer";
     pub const SYSTEM_TAGS: &[&str] = &[
         "name",
+        "maker",
+        "kind",
+        "nominalFocalLength",
         "fnumber",
         "effectiveFocalLength",
         "fieldOfView",

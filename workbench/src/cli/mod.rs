@@ -5,9 +5,11 @@ mod bench;
 mod compare;
 mod convert;
 mod crosscheck;
+mod curate;
 #[cfg(feature = "tui")]
 mod edit;
 mod info;
+mod lenses;
 mod plugins;
 mod precompute;
 mod render;
@@ -36,6 +38,9 @@ pub struct Cli {
 pub enum Command {
     /// Show a lens prescription and its paraxial data.
     Info(info::InfoArgs),
+    /// List the bundled lenses (name, maker, focal length, f-number, kind, elements, ghosts),
+    /// filtered by maker, focal length, f-number, kind or words.
+    Lenses(lenses::LensesArgs),
     /// Precompute ghost bounds over a range of incidence angles (for `render --precomputed`).
     Precompute(precompute::PrecomputeArgs),
     /// Render the ghost flares and starbursts of a lens for one or more lights to an HDR image.
@@ -70,6 +75,10 @@ pub enum Command {
     /// extreme f-numbers, near-flat, tiny and huge radii, near total internal reflection, thin
     /// air gaps, caustics, four reflections; exits 1 when a figure is outside its limit.
     Stability(stability::StabilityArgs),
+    /// Rebuild the bundled library's FlareSim lenses from lenses/sources/flaresim-selection.txt,
+    /// checking each (for maintainers; docs/lenses.md).
+    #[command(hide = true)]
+    Curate(curate::CurateArgs),
 }
 
 /// Runs the command line; errors are printed with their causes.
@@ -77,6 +86,8 @@ pub fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Info(a) => info::run(a, cli.quiet),
+        Command::Lenses(a) => lenses::run(a, cli.quiet),
+        Command::Curate(a) => curate::run(a, cli.quiet),
         Command::Trace(a) => trace::run(a, cli.quiet),
         Command::Render(a) => render::run(a, cli.quiet),
         Command::Apply(a) => apply::run(a, cli.quiet),

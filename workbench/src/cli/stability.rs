@@ -10,7 +10,8 @@ use crate::table::Table;
 
 #[derive(Debug, Args)]
 pub struct StabilityArgs {
-    /// Lens files or bundled lens names (default: every bundled lens).
+    /// Lens files or bundled lens names (default: the 19 lenses at the top of lenses/; the
+    /// curated ones in its maker folders are checked by `flarebench curate`).
     pub lenses: Vec<String>,
     /// The quick subset: fewer light angles, 160 px frames, fewer Monte-Carlo rays, no Nikon
     /// zoom Monte-Carlo comparison (what CI runs).
@@ -58,7 +59,7 @@ pub fn run(args: &StabilityArgs, quiet: bool) -> anyhow::Result<()> {
         }
     }
     let names = if args.lenses.is_empty() {
-        lens_library::bundled_names()
+        lens_library::core_names()
     } else {
         args.lenses.clone()
     };

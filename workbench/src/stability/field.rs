@@ -99,6 +99,12 @@ fn scan(system: &LensSystem) -> FieldScan {
     FieldScan { aims, edge_deg }
 }
 
+/// The edge of `system`'s field (degrees): where its chief ray lands on the film's corner,
+/// else the largest angle where a chief ray was found (the lens must have a stop).
+pub fn edge_deg(system: &LensSystem) -> f64 {
+    scan(system).edge_deg
+}
+
 /// The light angles rendered (degrees): fractions of the field's edge, capped below grazing,
 /// and grazing itself.
 pub fn light_angles(edge_deg: f64, quick: bool) -> Vec<f64> {

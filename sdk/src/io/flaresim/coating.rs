@@ -32,7 +32,7 @@ fn quarter_wave(index: f64) -> CoatingLayer {
 
 /// The coating of `layers` (0, 1, 2) on an interface from index `before` to `after` (nd; 1 is
 /// air). `None` when the file asks for a coating where there is no air–glass interface.
-pub(super) fn stack(layers: u8, before: f64, after: f64) -> Option<Coating> {
+pub fn stack(layers: u8, before: f64, after: f64) -> Option<Coating> {
     if layers == 0 {
         return Some(Coating::None);
     }

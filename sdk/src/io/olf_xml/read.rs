@@ -7,6 +7,7 @@ use super::spans::{ElementSpans, SystemSpans};
 use super::tags;
 use crate::io::LensFileError;
 use crate::io::xml_tree::{self, Node};
+use crate::lens_kind::parse_kinds;
 use crate::system::{LensSystem, Surface, SurfaceKind, curvature_from_radius};
 
 /// Film size used when a file gives none (full-frame 35 mm).
@@ -67,6 +68,13 @@ fn read_system(
             stem
         }
     };
+    let kind = match f.get("kind") {
+        Some(node) => {
+            parse_kinds(node.value()).map_err(|m| ctx.error(node.value_pos(), "kind", m))?
+        }
+        None => Vec::new(),
+    };
+    let nominal_focal_mm = read_nominal_focal(ctx, f.get("nominalFocalLength"))?;
     // OpenLensFlare writes 0 for an unset f-number, focal length or field of view.
     let unset_zero = |v: Option<f64>| v.filter(|x| *x != 0.0);
     let f_number = unset_zero(number(ctx, f.get("fnumber"))?);
@@ -111,6 +119,9 @@ fn read_system(
     }
     let system = LensSystem {
         name,
+        maker: text(f.get("maker")).unwrap_or_default(),
+        kind,
+        nominal_focal_mm,
         f_number,
         stated_efl_mm,
         field_of_view_deg,
@@ -256,6 +267,33 @@ fn read_curvature(
             0.0
         }
     })
+}
+
+/// `<nominalFocalLength>`: the focal length the maker names the lens by (mm), one positive
+/// number (a prime) or the shortest and longest in order (a zoom).
+fn read_nominal_focal(
+    ctx: &mut Ctx<'_>,
+    node: Option<&Node>,
+) -> Result<Option<[f64; 2]>, LensFileError> {
+    let Some(node) = node else { return Ok(None) };
+    let values: Option<Vec<f64>> = node
+        .value()
+        .split_whitespace()
+        .map(|w| w.parse::<f64>().ok().filter(|v| v.is_finite() && *v > 0.0))
+        .collect();
+    match values.as_deref() {
+        Some(&[f]) => Ok(Some([f, f])),
+        Some(&[a, b]) if a <= b => Ok(Some([a, b])),
+        _ => Err(ctx.error(
+            node.value_pos(),
+            "nominalFocalLength",
+            format!(
+                "expected the focal length the lens is named by in mm, one positive number \
+                 (`135`) or a zoom's shortest and longest in order (`24 70`), got `{}`",
+                node.value()
+            ),
+        )),
+    }
 }
 
 fn read_aspheric(ctx: &mut Ctx<'_>, node: Option<&Node>) -> Result<[f64; 8], LensFileError> {

@@ -10,6 +10,7 @@ use super::{parse_olf_xml, write_olf_xml, write_xml};
 use crate::coating::{Coating, CoatingLayer};
 use crate::glass::GlassCatalog;
 use crate::io::{LensFileError, read_lens};
+use crate::lens_kind::LensKind;
 use crate::system::{LensSystem, Medium, Surface, SurfaceKind};
 
 fn olf_dir() -> PathBuf {
@@ -197,6 +198,69 @@ fn our_extensions_round_trip() {
     let back = parse_olf_xml(&text, "ours.xml").unwrap();
     assert!(back.warnings.is_empty(), "{:?}", back.warnings);
     assert_eq!(back.system, s);
+}
+
+#[test]
+fn maker_kind_and_nominal_focal_length_round_trip_after_the_name() {
+    let mut s = small_system();
+    s.maker = "Carl Zeiss & Co".into();
+    s.kind = vec![LensKind::Zoom, LensKind::Cine];
+    s.nominal_focal_mm = Some([24.0, 70.5]);
+    let text = write_xml(&s);
+    assert!(
+        text.contains(
+            "<name>test</name>\n    <maker>Carl Zeiss &amp; Co</maker>\n    \
+             <kind>zoom cine</kind>\n    <nominalFocalLength>24 70.5</nominalFocalLength>\n"
+        ),
+        "{text}"
+    );
+    let back = parse_olf_xml(&text, "ours.xml").unwrap();
+    assert!(back.warnings.is_empty(), "{:?}", back.warnings);
+    assert_eq!(back.system, s);
+    // A prime's is one number.
+    s.nominal_focal_mm = Some([135.0, 135.0]);
+    let text = write_xml(&s);
+    assert!(
+        text.contains("<nominalFocalLength>135</nominalFocalLength>"),
+        "{text}"
+    );
+    assert_eq!(parse_olf_xml(&text, "ours.xml").unwrap().system, s);
+    // OpenLensFlare's loader would refuse them: the strict export leaves them out.
+    let strict = write_olf_xml(&s);
+    for tag in ["<maker>", "<kind>", "<nominalFocalLength>"] {
+        assert!(!strict.contains(tag), "{strict}");
+    }
+}
+
+#[test]
+fn a_file_without_maker_kind_or_nominal_focal_length_reads_as_before() {
+    let s = small_system();
+    assert_eq!(
+        (s.maker.as_str(), s.kind.as_slice(), s.nominal_focal_mm),
+        ("", &[][..], None)
+    );
+    let text = write_xml(&s);
+    for tag in ["<maker>", "<kind>", "<nominalFocalLength>"] {
+        assert!(!text.contains(tag), "{text}");
+    }
+}
+
+#[test]
+fn bad_kinds_and_nominal_focal_lengths_are_errors_at_their_tags() {
+    let name = "<name>test</name>";
+    let e = expect_error(name, "<name>test</name><kind>prime wide</kind>", "kind", 3);
+    assert!(e.message.contains("unknown lens kind `wide`"), "{e}");
+    let e = expect_error(name, "<name>test</name><kind>prime zoom</kind>", "kind", 3);
+    assert!(e.message.contains("not both"), "{e}");
+    for bad in ["70 24", "", "24 70 200", "0 35", "24 inf", "24 mm", "-50"] {
+        let e = expect_error(
+            name,
+            &format!("<name>test</name><nominalFocalLength>{bad}</nominalFocalLength>"),
+            "nominalFocalLength",
+            3,
+        );
+        assert!(e.message.contains(&format!("got `{bad}`")), "{e}");
+    }
 }
 
 #[test]
@@ -586,6 +650,11 @@ fn system() -> impl Strategy<Value = LensSystem> {
         text_strategy("[a-zA-Z0-9 &<>\"'.,;:()/\n-]{0,60}"),
         text_strategy("[a-zA-Z0-9 &<>.,:/-]{0,40}"),
         proptest::collection::vec(surface(), 0..6),
+        (
+            text_strategy("[a-zA-Z0-9 &<>.-]{0,16}"),
+            proptest::sample::subsequence(LensKind::ALL.to_vec(), 0..4),
+            proptest::option::of((1e-3f64..1e4, prop_oneof![Just(1.0), 1.0f64..10.0])),
+        ),
     )
         .prop_map(
             |(
@@ -595,9 +664,16 @@ fn system() -> impl Strategy<Value = LensSystem> {
                 notes,
                 source,
                 surfaces,
+                (maker, mut kind, range),
             )| {
+                if kind.contains(&LensKind::Prime) {
+                    kind.retain(|k| *k != LensKind::Zoom);
+                }
                 LensSystem {
                     name,
+                    maker,
+                    kind,
+                    nominal_focal_mm: range.map(|(a, k)| [a, a * k]),
                     f_number,
                     stated_efl_mm,
                     field_of_view_deg,

@@ -5,6 +5,7 @@ use std::fmt::Write as _;
 
 use crate::coating::Coating;
 use crate::glass::GlassCatalog;
+use crate::lens_kind::kinds_text;
 use crate::system::{LensSystem, Medium, Surface, SurfaceKind};
 
 /// The Abbe number OpenLensFlare's own files give air (ignored when reading: n = 1 is air).
@@ -20,8 +21,8 @@ enum Flavor {
 }
 
 /// Writes the system as flarebench XML: every OpenLensFlare tag, plus `<curvature>` (exact),
-/// `<conic>`, `<aspheric>`, `<glass>`, `<coatingStack>`, `<source>` and `<notes>` where they
-/// carry information. Reading the result gives back an equal [`LensSystem`] (strings are
+/// `<conic>`, `<aspheric>`, `<glass>`, `<coatingStack>`, `<source>`, `<notes>`, `<maker>`,
+/// `<kind>` and `<nominalFocalLength>` where they carry information. Reading the result gives back an equal [`LensSystem`] (strings are
 /// trimmed). The format is described in `docs/formats.md`.
 pub fn write_xml(system: &LensSystem) -> String {
     write(system, Flavor::Flarebench)
@@ -29,8 +30,8 @@ pub fn write_xml(system: &LensSystem) -> String {
 
 /// Writes the system with OpenLensFlare's tags only, for OpenLensFlare's LensPlanner, which
 /// refuses files with tags it does not know. Lossy: conic and aspheric terms, catalogue glass
-/// names (their nd/Vd are kept), coating stacks beyond the first layer, notes and source are
-/// dropped (the source and notes go into a comment).
+/// names (their nd/Vd are kept), coating stacks beyond the first layer, maker, kind and focal
+/// range are dropped, and the source and notes go into a comment.
 pub fn write_olf_xml(system: &LensSystem) -> String {
     write(system, Flavor::OpenLensFlare)
 }
@@ -90,6 +91,19 @@ fn write(system: &LensSystem, flavor: Flavor) -> String {
         let _ = writeln!(out, "    <{name}>{value}</{name}>");
     };
     tag("name", &escape(system.name.trim()));
+    if flavor == Flavor::Flarebench {
+        if !system.maker.trim().is_empty() {
+            tag("maker", &escape(system.maker.trim()));
+        }
+        if !system.kind.is_empty() {
+            tag("kind", &kinds_text(&system.kind));
+        }
+        match system.nominal_focal_mm {
+            Some([a, b]) if a == b => tag("nominalFocalLength", &num(a)),
+            Some([a, b]) => tag("nominalFocalLength", &format!("{} {}", num(a), num(b))),
+            None => {}
+        }
+    }
     for (name, value) in [
         ("fnumber", system.f_number),
         ("effectiveFocalLength", system.stated_efl_mm),
