@@ -11,6 +11,7 @@ pub mod document;
 pub mod edit;
 pub mod file_watch;
 pub mod flare;
+pub mod gallery;
 pub mod input_image;
 pub mod label;
 pub mod lens_drawing;

@@ -8,6 +8,7 @@ mod crosscheck;
 mod curate;
 #[cfg(feature = "tui")]
 mod edit;
+mod gallery;
 mod info;
 mod lenses;
 mod plugins;
@@ -41,6 +42,9 @@ pub enum Command {
     /// List the bundled lenses (name, maker, focal length, f-number, kind, elements, ghosts),
     /// filtered by maker, focal length, f-number, kind or words.
     Lenses(lenses::LensesArgs),
+    /// Render lenses' flares side by side at a standard light into a folder: a contact sheet
+    /// and an offline index.html with each lens's section and figures (cached, resumable).
+    Gallery(gallery::GalleryArgs),
     /// Precompute ghost bounds over a range of incidence angles (for `render --precomputed`).
     Precompute(precompute::PrecomputeArgs),
     /// Render the ghost flares and starbursts of a lens for one or more lights to an HDR image.
@@ -87,6 +91,7 @@ pub fn main() -> ExitCode {
     let result = match &cli.command {
         Command::Info(a) => info::run(a, cli.quiet),
         Command::Lenses(a) => lenses::run(a, cli.quiet),
+        Command::Gallery(a) => gallery::run(a, cli.quiet),
         Command::Curate(a) => curate::run(a, cli.quiet),
         Command::Trace(a) => trace::run(a, cli.quiet),
         Command::Render(a) => render::run(a, cli.quiet),
