@@ -886,3 +886,68 @@ fn fast_frames_are_planned_from_the_bounds_table_built_while_idle() {
     assert!(c.relative_rmse < 0.02, "{c:?}");
     assert!(c.energy_error.abs() < 2e-3, "{c:?}");
 }
+
+/// `O` opens the lens picker; words typed there filter the library (and are not shortcuts),
+/// Enter opens the first match, whose flare is then rendered; Escape closes it.
+#[test]
+fn o_opens_a_bundled_lens_picked_from_a_searchable_list() {
+    let mut viewer = Viewer::new(lens("heliar-tronnier"), options(), Box::new(|| {}));
+    let mut target = Offscreen::new(WINDOW.0, WINDOW.1).unwrap();
+    settled(&mut viewer, &mut target);
+    let starburst = viewer.scene().starburst;
+
+    target.pass(&mut viewer, key(egui::Key::O));
+    assert!(viewer.picker_open());
+    // Typed into the picker: `s` must not switch the starburst.
+    let mut typed = vec![Event::Text("hologon s".into())];
+    typed.extend(key(egui::Key::S));
+    target.pass(&mut viewer, typed);
+    target.pass(&mut viewer, Vec::new());
+    assert_eq!(
+        viewer.scene().starburst,
+        starburst,
+        "a key typed in the picker"
+    );
+    assert!(viewer.picker_open());
+    // Backspace the `s`, then Enter: the Zeiss Hologon.
+    target.pass(&mut viewer, key(egui::Key::Backspace));
+    target.pass(&mut viewer, key(egui::Key::Enter));
+    assert!(!viewer.picker_open());
+    assert_eq!(viewer.system().name, "Zeiss Hologon f8 15mm");
+    settled(&mut viewer, &mut target);
+    let f = viewer.frame_shown().unwrap();
+    assert!(f.stats.ghosts_drawn > 0, "the Hologon's flare is shown");
+    assert!(viewer.message().unwrap().contains("zeiss-hologon-f8-15mm"));
+
+    // Escape closes without opening anything.
+    target.pass(&mut viewer, key(egui::Key::O));
+    assert!(viewer.picker_open());
+    target.pass(&mut viewer, key(egui::Key::Escape));
+    assert!(!viewer.picker_open());
+    assert_eq!(viewer.system().name, "Zeiss Hologon f8 15mm");
+}
+
+/// With the editor, the lens is the editor's document: `O` says so and opens nothing.
+#[test]
+fn o_does_not_open_a_lens_the_editor_owns() {
+    let (change_tx, changes) = channel();
+    drop(change_tx);
+    let (_sel_tx, selection) = channel::<FromEditor>();
+    let (to_editor, _from_window) = channel::<ToEditor>();
+    let link = EditorLink {
+        changes,
+        selection,
+        to_editor,
+    };
+    let mut viewer =
+        Viewer::new(lens("heliar-tronnier"), options(), Box::new(|| {})).with_link(link);
+    let mut target = Offscreen::new(WINDOW.0, WINDOW.1).unwrap();
+    target.pass(&mut viewer, key(egui::Key::O));
+    assert!(!viewer.picker_open());
+    assert!(
+        viewer
+            .message()
+            .unwrap()
+            .contains("the editor owns the lens")
+    );
+}

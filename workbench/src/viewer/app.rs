@@ -16,6 +16,7 @@ use ghost_raytrace::scene::{LightSpec, Quality};
 use super::debug_view::{DebugState, DebugView};
 use super::flare_view;
 use super::flare_worker::{FlareFrame, FlareJob, FlareScene, FlareWorker, Stage, WorkerEvent};
+use super::lens_picker::LensPicker;
 use super::lens_view::{self, LensCamera, LensOverlay};
 use super::plugins::{PluginWatcher, SharedWaker, ViewerAlgo, WatchEvent};
 use super::status;
@@ -114,6 +115,8 @@ pub struct Viewer {
     plugin_watch: Option<PluginWatcher>,
     /// Wakes the window's event loop (from the render and watch threads).
     waker: SharedWaker,
+    /// The bundled library to open another lens from (`O`; not while an editor owns the lens).
+    picker: LensPicker,
 }
 
 /// What the debug views say for a plugin's frame.
@@ -184,6 +187,7 @@ impl Viewer {
             active_algo: None,
             plugin_watch: None,
             waker,
+            picker: LensPicker::default(),
         };
         v.rebuild_lens();
         v
@@ -596,6 +600,9 @@ impl Viewer {
         self.take_inputs();
         self.ensure_texture(ui.ctx());
 
+        if let Some(path) = self.picker.show(ui) {
+            self.open_lens(&path);
+        }
         egui::Panel::top("viewer-help").show(ui, |ui| {
             ui.horizontal_wrapped(|ui| {
                 ui.strong(&self.system.name);
@@ -717,8 +724,40 @@ impl Viewer {
         self.texture_offset_ev = self.scene.exposure_offset_ev;
     }
 
+    /// Whether the lens picker is open.
+    pub fn picker_open(&self) -> bool {
+        self.picker.is_open()
+    }
+
+    /// Shows the lens in `path` instead of the current one (from the lens picker).
+    fn open_lens(&mut self, path: &std::path::Path) {
+        match flarebench_sdk::io::read_lens(path) {
+            Ok(loaded) => {
+                self.set_system(Arc::new(loaded.system), 0);
+                self.camera = None;
+                self.message = Some(format!("opened {}", path.display()));
+            }
+            Err(e) => self.message = Some(format!("could not open the lens: {e}")),
+        }
+    }
+
     fn keys(&mut self, ctx: &egui::Context) {
+        // Keys typed into a text box (the lens picker's) are not shortcuts.
+        if ctx.egui_wants_keyboard_input() || self.picker.is_open() {
+            return;
+        }
         let pressed = |k: Key| ctx.input(|i| i.key_pressed(k));
+        if pressed(Key::O) {
+            if self.link.is_some() {
+                self.message = Some(
+                    "O opens another lens in `flarebench view`; here the editor owns the lens"
+                        .into(),
+                );
+            } else {
+                self.picker.toggle();
+                return;
+            }
+        }
         if pressed(Key::S) {
             self.scene.starburst = match self.scene.starburst {
                 StarburstMode::On => StarburstMode::Off,

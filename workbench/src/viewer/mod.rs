@@ -3,6 +3,7 @@
 //! status line. winit + wgpu, panels and painting by egui.
 //!
 //! - `app`: the viewer's state and its UI pass (`Viewer::frame`), the link with the editor
+//! - `lens_picker`: the bundled library in a searchable list (`O`), to open another lens
 //! - `lens_view`: the lens section painted from [`crate::lens_drawing`], pan, zoom, hover
 //! - `flare_view`: the flare image, light drag, exposure, ghost picking and labels
 //! - `flare_worker`: the render thread (newest job wins; fast, settled, reference stages)
@@ -26,6 +27,7 @@ pub mod flare_view;
 pub mod flare_worker;
 pub mod gfx;
 pub mod ghost_debug;
+pub mod lens_picker;
 pub mod lens_view;
 pub mod offscreen;
 pub mod plugins;

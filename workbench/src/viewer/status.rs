@@ -16,7 +16,7 @@ pub fn help_line() -> &'static str {
     "lens: drag pan · wheel zoom · F fit · W wavelengths | flare: drag light · wheel exposure · \
      click ghost · N / Shift-N next/previous ghost · G ghost alone · S starburst on/off/only · \
      Q quality · B blades · L labels · D debug view (grid/stop/radius/irradiance) · E error · \
-     A renderer (built-in / --algo plugins) · P save PNG · X save EXR"
+     A renderer (built-in / --algo plugins) · O open a bundled lens · P save PNG · X save EXR"
 }
 
 /// The error part of a frame's line.
