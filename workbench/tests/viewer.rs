@@ -216,17 +216,28 @@ fn a_drag_in_the_flare_view_moves_the_light_and_renders_anew() {
     assert!(viewer.frame_shown().unwrap().id > before_id);
 }
 
-#[test]
-fn clicking_a_ghost_selects_it_and_tells_the_editor() {
+/// A link to a pretend editor that sends no lens changes: the sender of its selections and the
+/// receiver of what the window tells it.
+fn editor_link() -> (
+    EditorLink,
+    std::sync::mpsc::Sender<FromEditor>,
+    std::sync::mpsc::Receiver<ToEditor>,
+) {
     let (change_tx, changes) = channel();
     drop(change_tx);
-    let (_sel_tx, selection) = channel::<FromEditor>();
+    let (sel_tx, selection) = channel::<FromEditor>();
     let (to_editor, from_window) = channel::<ToEditor>();
     let link = EditorLink {
         changes,
         selection,
         to_editor,
     };
+    (link, sel_tx, from_window)
+}
+
+#[test]
+fn clicking_a_ghost_selects_it_and_tells_the_editor() {
+    let (link, _sel_tx, from_window) = editor_link();
     let (viewer, log) =
         logged(Viewer::new(lens("heliar-tronnier"), options(), Box::new(|| {})).with_link(link));
     let mut viewer = viewer;
@@ -930,15 +941,7 @@ fn o_opens_a_bundled_lens_picked_from_a_searchable_list() {
 /// With the editor, the lens is the editor's document: `O` says so and opens nothing.
 #[test]
 fn o_does_not_open_a_lens_the_editor_owns() {
-    let (change_tx, changes) = channel();
-    drop(change_tx);
-    let (_sel_tx, selection) = channel::<FromEditor>();
-    let (to_editor, _from_window) = channel::<ToEditor>();
-    let link = EditorLink {
-        changes,
-        selection,
-        to_editor,
-    };
+    let (link, _sel_tx, _from_window) = editor_link();
     let mut viewer =
         Viewer::new(lens("heliar-tronnier"), options(), Box::new(|| {})).with_link(link);
     let mut target = Offscreen::new(WINDOW.0, WINDOW.1).unwrap();
