@@ -7,7 +7,7 @@ use std::path::Path;
 use anyhow::{Context, bail};
 use flarebench_sdk::ghost::enumerate::enumerate_ghosts;
 use flarebench_sdk::io::read_lens;
-use flarebench_sdk::paraxial::analyse;
+use flarebench_sdk::paraxial::{ParaxialData, analyse};
 use flarebench_sdk::{LensKind, LensSystem, SurfaceKind};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -50,6 +50,18 @@ pub fn elements(system: &LensSystem) -> usize {
         .count()
 }
 
+/// The focal length `system` is named by: a zoom's shortest and longest, a prime's twice; the
+/// file's stated focal length, else the paraxial one (`p`), when it gives none.
+pub fn named_focal_mm(system: &LensSystem, p: &ParaxialData) -> [f64; 2] {
+    let focal = system.stated_efl_mm.unwrap_or(p.efl_mm);
+    system.nominal_focal_mm.unwrap_or([focal, focal])
+}
+
+/// The f-number setting of `system`, else its stop's wide open (`p`).
+pub fn f_number(system: &LensSystem, p: &ParaxialData) -> f64 {
+    system.f_number.unwrap_or(p.open_f_number)
+}
+
 /// Reads one lens of the library for the listing.
 pub fn load(lens: &BundledLens, root: &Path) -> anyhow::Result<ListedLens> {
     let sys = read_lens(&lens.path)
@@ -57,7 +69,6 @@ pub fn load(lens: &BundledLens, root: &Path) -> anyhow::Result<ListedLens> {
         .system;
     let p = analyse(&sys, sys.default_wavelength_nm())
         .with_context(|| format!("bundled lens `{}`", lens.qualified))?;
-    let focal = sys.stated_efl_mm.unwrap_or(p.efl_mm);
     let file = lens
         .path
         .strip_prefix(root)
@@ -70,9 +81,9 @@ pub fn load(lens: &BundledLens, root: &Path) -> anyhow::Result<ListedLens> {
         title: sys.name.clone(),
         maker: sys.maker.clone(),
         kind: sys.kind.clone(),
-        focal_mm: sys.nominal_focal_mm.unwrap_or([focal, focal]),
+        focal_mm: named_focal_mm(&sys, &p),
         efl_mm: p.efl_mm,
-        f_number: sys.f_number.unwrap_or(p.open_f_number),
+        f_number: f_number(&sys, &p),
         elements: elements(&sys),
         ghosts: enumerate_ghosts(&sys).len(),
         notes: sys.notes,

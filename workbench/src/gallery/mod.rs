@@ -25,7 +25,7 @@ use ghost_raytrace::plan::PlanOptions;
 use ghost_raytrace::scene::{LightSpec, Quality};
 
 use crate::flare::{Flare, Preset, Scene, StarburstMode, frame_for};
-use crate::lens_listing::elements;
+use crate::lens_listing::{elements, f_number, named_focal_mm};
 use crate::output::{ToneMap, save_image};
 use crate::stability::field;
 
@@ -179,10 +179,8 @@ pub fn render(
         title: sys.name.clone(),
         maker: sys.maker.clone(),
         kind: sys.kind.iter().map(|k| k.name().to_string()).collect(),
-        focal_mm: sys
-            .nominal_focal_mm
-            .unwrap_or([sys.stated_efl_mm.unwrap_or(paraxial.efl_mm); 2]),
-        f_number: sys.f_number.unwrap_or(paraxial.open_f_number),
+        focal_mm: named_focal_mm(&sys, &paraxial),
+        f_number: f_number(&sys, &paraxial),
         elements: elements(&sys),
         field_edge_deg: edge_deg,
         light_theta_deg: lights[0].theta_deg,
