@@ -21,7 +21,7 @@ const FINE_BANDS: usize = 80;
 
 /// Normal-incidence factors of every surface at one wavelength:
 /// `[T forward, R forward, T backward, R backward]` (1, 0, 1, 0 where nothing reflects).
-fn surface_factors(system: &LensSystem, lambda_nm: f64) -> Vec<[f64; 4]> {
+pub fn surface_factors(system: &LensSystem, lambda_nm: f64) -> Vec<[f64; 4]> {
     let n = system.indices(lambda_nm);
     system
         .surfaces
@@ -39,7 +39,7 @@ fn surface_factors(system: &LensSystem, lambda_nm: f64) -> Vec<[f64; 4]> {
 }
 
 /// Throughput of a ghost path at normal incidence from per-surface factors.
-fn path_throughput(path: GhostPath, f: &[[f64; 4]], sensor: usize) -> f64 {
+pub fn path_throughput(path: GhostPath, f: &[[f64; 4]], sensor: usize) -> f64 {
     // Forward to the first reflection; then back and forward between reflections (two or
     // four of them); then forward to the sensor. Each leg's transmittances are multiplied
     // first, then the legs and reflectances in order (as the two-reflection form always did).
@@ -157,6 +157,36 @@ impl GhostColours {
 }
 
 impl GhostColours {
+    /// The light `path` carries over `bin` at normal incidence, per linear-sRGB channel:
+    /// `Σ w(λ) T₀(λ)` over the bin's fine cells (each by its share inside the bin), times the
+    /// intensity. [`GhostColours::bin_colour`] is this over `T₀` at the bin's centre. A
+    /// ghost's traced image at the bin with its colour divided out, times this, is its image
+    /// under other coatings of the same surfaces as long as the coatings change the
+    /// throughput's variation with the rays' angles little: what a coating fit re-weights.
+    pub fn bin_light(&self, path: GhostPath, bin: &Bin) -> [f64; 3] {
+        let cell = bin_width_nm(FINE_BANDS);
+        let index = |nm: f64| ((nm - SAMPLING_MIN_NM) / cell).clamp(0.0, FINE_BANDS as f64);
+        let (first, last) = (
+            index(bin.lo_nm).floor() as usize,
+            index(bin.hi_nm).ceil() as usize,
+        );
+        let mut c = [0f64; 3];
+        for (k, (_, w, f)) in self.fine.iter().enumerate().take(last).skip(first) {
+            let lo = bin_edge_nm(FINE_BANDS, k).max(bin.lo_nm);
+            let hi = bin_edge_nm(FINE_BANDS, k + 1).min(bin.hi_nm);
+            let share = ((hi - lo) / cell).clamp(0.0, 1.0);
+            let t = path_throughput(path, f, self.sensor);
+            if share > 0.0 && t > 0.0 {
+                for i in 0..3 {
+                    c[i] += f64::from(w[i]) * t * share * f64::from(self.intensity);
+                }
+            }
+        }
+        c
+    }
+}
+
+impl GhostColours {
     /// `path`'s spectral shape from its flux measured at each of [`SHAPE_NODES_NM`] (in any
     /// unit: only its variation counts); `None` when the ghost is dark at some node.
     pub fn shape(
@@ -254,6 +284,14 @@ pub fn bin_edge_nm(m: usize, i: usize) -> f64 {
 
 fn bin_width_nm(m: usize) -> f64 {
     (SAMPLING_MAX_NM - SAMPLING_MIN_NM) / m.max(1) as f64
+}
+
+impl Bin {
+    /// `path`'s throughput at normal incidence at the bin's centre (the product of its
+    /// surfaces' Fresnel or coating factors there).
+    pub fn throughput(&self, path: GhostPath, system: &LensSystem) -> f64 {
+        path_throughput(path, &self.factors, system.sensor_index())
+    }
 }
 
 impl Bin {

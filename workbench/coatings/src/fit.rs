@@ -1,0 +1,705 @@
+//! Fitting a lens's coatings, and the light's intensity and colour, to a linear image of its
+//! flare.
+//!
+//! The model image is `Σᵢ Sᵢ(x) cᵢ(θ) ∘ g`: every band image `Sᵢ` of the basis
+//! (`crate::basis`) times its colour under the coatings `θ` (`crate::model`), times per-channel
+//! gains `g` (the light's intensity and colour as the camera saw them). Over the unmasked
+//! pixels, per channel, `‖S c − y‖² = cᵀMc − 2cᵀv + yᵀy` with the Gram matrix `M = SᵀS` and
+//! `v = Sᵀy`: with `M = LLᵀ` (Cholesky), `‖S c − y‖² = ‖Lᵀc − L⁻¹v‖² + const`. The solver
+//! works on those `3 × bands` residuals, exactly the image's least squares but independent of
+//! its pixel count: an evaluation costs the colours and one triangular product.
+//!
+//! The solver is bounded Levenberg–Marquardt (`crate::solve`), from several starts, each first
+//! improved surface by surface over a grid of each surface's parameters (`Evaluator::scan`:
+//! a layer's reflectance is periodic in its thickness, and a local solver keeps to the valley
+//! it starts in). The basis
+//! is then rendered again with the fitted coatings and the fit repeated from its solution
+//! (`FitOptions::passes`), which removes the basis's one approximation (`crate::basis`) at the
+//! solution. Uncertainties come from the Jacobian there: `cov = s² (JᵀJ)⁺` with `s²` the
+//! residual variance per pixel channel; directions `JᵀJ` does not see (singular values under
+//! [`NULL_RCOND`] of the largest, in parameters scaled by their ranges) are reported as not
+//! constrained, with the parameters they mix.
+
+use flarebench_sdk::LensSystem;
+use flarebench_sdk::aperture::Aperture;
+use flarebench_sdk::image::HdrImage;
+use ghost_raytrace::scene::Quality;
+use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::CoatingError;
+use crate::basis::Basis;
+use crate::model::{BandBins, CoatingModel, ghost_energies};
+use crate::solve::{Bound, jacobian_at, minimise};
+
+/// Singular values of the scaled `JᵀJ` below this fraction of the largest mark directions the
+/// image does not constrain.
+pub const NULL_RCOND: f64 = 1e-8;
+/// A ghost's energy is constrained by the image when its standard error is at most this
+/// fraction of it.
+pub const CONSTRAINED_ENERGY: f64 = 0.01;
+
+/// Values a parameter takes across its bounds in the surface-by-surface scan of a start.
+pub const SCAN_STEPS: usize = 12;
+/// Rounds of that scan over the surfaces.
+pub const SCAN_ROUNDS: usize = 3;
+
+fn surface_params(model: &CoatingModel, s: &crate::model::ModelSurface) -> usize {
+    model
+        .surfaces
+        .iter()
+        .find(|t| t.offset > s.offset)
+        .map_or(model.len(), |t| t.offset)
+        - s.offset
+}
+
+/// The image to fit and which of its pixels count.
+#[derive(Clone, Debug)]
+pub struct Target {
+    /// Linear, the basis frame's size.
+    pub image: HdrImage,
+    /// True where a pixel counts (unsaturated, not excluded).
+    pub mask: Vec<bool>,
+}
+
+/// How to fit.
+#[derive(Clone, Debug)]
+pub struct FitOptions {
+    pub quality: Quality,
+    /// Fit the per-channel gains (the light's intensity and colour); otherwise they stay 1.
+    pub fit_gains: bool,
+    /// Bases rendered: the first with the lens's own coatings, each next with the last fit's.
+    pub passes: usize,
+    /// Starts of the first pass: (index, quarter-wave nm) of every single layer.
+    pub starts: Vec<(f64, f64)>,
+}
+
+impl Default for FitOptions {
+    fn default() -> Self {
+        FitOptions {
+            quality: Quality::Default,
+            fit_gains: true,
+            passes: 2,
+            starts: vec![(1.38, 450.0), (1.38, 550.0), (1.38, 650.0), (1.6, 550.0)],
+        }
+    }
+}
+
+/// One fitted parameter.
+#[derive(Clone, Debug, Serialize)]
+pub struct FittedParam {
+    pub name: String,
+    pub value: f64,
+    /// Its standard error (`null` when not constrained).
+    pub sigma: Option<f64>,
+    /// False when the image does not constrain it (alone or in some combination).
+    pub constrained: bool,
+}
+
+/// One ghost's fitted energy.
+#[derive(Clone, Debug, Serialize)]
+pub struct FittedGhost {
+    pub path: String,
+    /// Sum over the frame, per channel.
+    pub energy: [f64; 3],
+    /// Relative standard error of its energy (sum of channels).
+    pub relative_sigma: f64,
+    pub constrained: bool,
+    /// Its residual: the sum of the image's residual over the pixels where this ghost is at
+    /// least half its peak, over its own light there (`null` when it has none unmasked).
+    pub residual: Option<f64>,
+}
+
+/// A direction in parameter space the image does not see.
+#[derive(Clone, Debug, Serialize)]
+pub struct Unconstrained {
+    /// The parameters it mixes (weight ≥ 0.2 of the direction), with their weights.
+    pub params: Vec<(String, f64)>,
+    /// Its singular value over the largest.
+    pub relative: f64,
+}
+
+/// What a fit found.
+#[derive(Clone, Debug, Serialize)]
+pub struct Fit {
+    pub params: Vec<FittedParam>,
+    /// Per-channel gains (intensity and colour of the light as the camera saw it).
+    pub gains: [f64; 3],
+    pub ghosts: Vec<FittedGhost>,
+    pub unconstrained: Vec<Unconstrained>,
+    /// RMS of the residual over the counted pixels, over the RMS of the image there.
+    pub relative_rmse: f64,
+    pub pixels_counted: usize,
+    pub band_images: usize,
+    pub evaluations: usize,
+    pub passes: usize,
+    pub converged: bool,
+    pub fit_ms: f64,
+    pub basis_ms: f64,
+    /// Model evaluations per second (colours and the reduced residual).
+    pub evaluations_per_s: f64,
+    #[serde(skip)]
+    pub system: LensSystem,
+    #[serde(skip)]
+    pub image: HdrImage,
+    #[serde(skip)]
+    pub basis: Basis,
+    #[serde(skip)]
+    pub raw: Vec<f64>,
+}
+
+/// The Gram system of a basis against a target: `Lᵀ` and `L⁻¹v` per channel.
+struct Reduced {
+    lt: DMatrix<f64>,
+    z: [DVector<f64>; 3],
+    /// `yᵀy − ‖z‖²` per channel: the squared residual no coefficients can remove.
+    floor: f64,
+    pixels: usize,
+    yy: f64,
+}
+
+fn reduce(basis: &Basis, target: &Target) -> Reduced {
+    let bands: Vec<&crate::basis::BandImage> =
+        basis.ghosts.iter().flat_map(|g| g.bands.iter()).collect();
+    let n = bands.len();
+    let w = basis.frame.width;
+    let mask = &target.mask;
+    let rows: Vec<Vec<f64>> = (0..n)
+        .into_par_iter()
+        .map(|i| {
+            let a = bands[i];
+            (0..n)
+                .map(|j| {
+                    let b = bands[j];
+                    let (x0, x1) = (a.x0.max(b.x0), (a.x0 + a.w).min(b.x0 + b.w));
+                    let (y0, y1) = (a.y0.max(b.y0), (a.y0 + a.h).min(b.y0 + b.h));
+                    let mut s = 0.0;
+                    for y in y0..y1 {
+                        for x in x0..x1 {
+                            if mask[y * w + x] {
+                                s += f64::from(a.at(x, y)) * f64::from(b.at(x, y));
+                            }
+                        }
+                    }
+                    s
+                })
+                .collect()
+        })
+        .collect();
+    let mut m = DMatrix::from_fn(n, n, |i, j| rows[i][j]);
+    let v: [DVector<f64>; 3] = std::array::from_fn(|ch| {
+        DVector::from_iterator(
+            n,
+            bands.iter().map(|a| {
+                let mut s = 0.0;
+                for y in a.y0..a.y0 + a.h {
+                    for x in a.x0..a.x0 + a.w {
+                        if mask[y * w + x] {
+                            s += f64::from(a.at(x, y))
+                                * f64::from(target.image.pixels[y * w + x][ch]);
+                        }
+                    }
+                }
+                s
+            }),
+        )
+    });
+    let yy: f64 = target
+        .image
+        .pixels
+        .iter()
+        .zip(mask)
+        .filter(|(_, m)| **m)
+        .map(|(p, _)| p.iter().map(|&c| f64::from(c) * f64::from(c)).sum::<f64>())
+        .sum();
+    let scale = (0..n).map(|i| m[(i, i)]).fold(0.0, f64::max).max(1e-300);
+    let mut ridge = 1e-12 * scale;
+    let chol = loop {
+        let mut mm = m.clone();
+        for i in 0..n {
+            mm[(i, i)] += ridge;
+        }
+        if let Some(c) = mm.cholesky() {
+            break c;
+        }
+        ridge *= 10.0;
+        if ridge > scale {
+            // Unreachable for a positive semidefinite Gram matrix; keep a diagonal one.
+            m.fill_with_identity();
+        }
+    };
+    let l = chol.l();
+    let z: [DVector<f64>; 3] = std::array::from_fn(|ch| {
+        l.solve_lower_triangular(&v[ch])
+            .unwrap_or_else(|| DVector::zeros(n))
+    });
+    let floor = yy - z.iter().map(|z| z.norm_squared()).sum::<f64>();
+    Reduced {
+        lt: l.transpose(),
+        z,
+        floor: floor.max(0.0),
+        pixels: mask.iter().filter(|m| **m).count(),
+        yy,
+    }
+}
+
+/// The fit's residuals for parameters `p` (coatings, then gains when fitted).
+struct Evaluator<'a> {
+    model: &'a CoatingModel,
+    basis: &'a Basis,
+    bins: BandBins,
+    reduced: Reduced,
+    fit_gains: bool,
+}
+
+impl Evaluator<'_> {
+    fn gains(&self, p: &[f64]) -> [f64; 3] {
+        if self.fit_gains {
+            let k = self.model.len();
+            [p[k], p[k + 1], p[k + 2]]
+        } else {
+            [1.0; 3]
+        }
+    }
+
+    fn colours(&self, p: &[f64]) -> Option<Vec<[f64; 3]>> {
+        let sys = self.model.apply(&p[..self.model.len()]);
+        self.bins.colours(self.basis, &sys).ok()
+    }
+
+    fn residuals(&self, p: &[f64]) -> Vec<f64> {
+        let n = self.reduced.z[0].len();
+        let g = self.gains(p);
+        let Some(c) = self.colours(p) else {
+            return vec![f64::NAN; 3 * n];
+        };
+        let mut r = Vec::with_capacity(3 * n);
+        for ch in 0..3 {
+            let cv = DVector::from_iterator(n, c.iter().map(|c| c[ch] * g[ch]));
+            let res = &self.reduced.lt * cv - &self.reduced.z[ch];
+            r.extend(res.iter());
+        }
+        r
+    }
+
+    /// Half the squared residual at `p` with the gains that fit best there.
+    fn cost_with_best_gains(&self, p: &mut [f64]) -> f64 {
+        if self.fit_gains {
+            let g = self.best_gains(p);
+            let k = self.model.len();
+            p[k..k + 3].copy_from_slice(&g);
+        }
+        0.5 * self.residuals(p).iter().map(|v| v * v).sum::<f64>()
+    }
+
+    /// A start improved surface by surface: each surface's parameters in turn over a grid
+    /// of [`SCAN_STEPS`] values a parameter across its bounds (the others held, the gains
+    /// the best for each), the best kept; [`SCAN_ROUNDS`] rounds over the surfaces. A single
+    /// layer's reflectance is periodic in its thickness, so a local solver from one start
+    /// stops in whichever valley it starts in; the scan finds each surface's valley.
+    fn scan(&self, mut p: Vec<f64>, bounds: &[Bound]) -> Vec<f64> {
+        let mut cost = self.cost_with_best_gains(&mut p);
+        for _ in 0..SCAN_ROUNDS {
+            for s in &self.model.surfaces {
+                let range = s.offset..s.offset + surface_params(self.model, s);
+                if range.is_empty() || range.len() > 2 {
+                    continue;
+                }
+                let axes: Vec<Vec<f64>> = range
+                    .clone()
+                    .map(|i| match bounds[i] {
+                        Bound::Range(lo, hi) => (0..SCAN_STEPS)
+                            .map(|k| lo + (hi - lo) * (k as f64 + 0.5) / SCAN_STEPS as f64)
+                            .collect(),
+                        Bound::Positive => vec![p[i]],
+                    })
+                    .collect();
+                let mut grid: Vec<Vec<f64>> = vec![Vec::new()];
+                for axis in &axes {
+                    grid = grid
+                        .iter()
+                        .flat_map(|g| axis.iter().map(move |&v| [g.as_slice(), &[v]].concat()))
+                        .collect();
+                }
+                let best = grid
+                    .par_iter()
+                    .map(|values| {
+                        let mut q = p.clone();
+                        q[range.clone()].copy_from_slice(values);
+                        let c = self.cost_with_best_gains(&mut q);
+                        (c, q)
+                    })
+                    .min_by(|a, b| a.0.total_cmp(&b.0));
+                if let Some((c, q)) = best.filter(|(c, _)| *c < cost) {
+                    cost = c;
+                    p = q;
+                }
+            }
+        }
+        p
+    }
+
+    /// Per channel, the gains that fit best for the coatings of `p` (linear least squares).
+    fn best_gains(&self, p: &[f64]) -> [f64; 3] {
+        let Some(c) = self.colours(p) else {
+            return [1.0; 3];
+        };
+        let n = self.reduced.z[0].len();
+        std::array::from_fn(|ch| {
+            let cv = DVector::from_iterator(n, c.iter().map(|c| c[ch]));
+            let lc = &self.reduced.lt * cv;
+            let num = lc.dot(&self.reduced.z[ch]);
+            let den = lc.norm_squared();
+            if den > 0.0 && num > 0.0 {
+                num / den
+            } else {
+                1.0
+            }
+        })
+    }
+}
+
+/// Fits `model`'s coatings (and the gains) to `target`, rendering the basis with `aperture`
+/// at `target`'s frame under `light`.
+pub fn fit(
+    model: &CoatingModel,
+    aperture: &Aperture,
+    light: &ghost_raytrace::scene::LightSpec,
+    target: &Target,
+    options: &FitOptions,
+) -> Result<Fit, CoatingError> {
+    let frame = flarebench_sdk::frame::Frame::across_film(
+        target.image.width,
+        target.image.height,
+        model.system().film_width_mm,
+    );
+    if target.mask.len() != target.image.pixels.len() {
+        return Err(CoatingError::MaskSize);
+    }
+    let mut bounds = model.bounds();
+    if options.fit_gains {
+        bounds.extend([Bound::Positive; 3]);
+    }
+    let mut best: Option<Vec<f64>> = None;
+    let (mut evaluations, mut fit_ms, mut basis_ms, mut converged) = (0, 0.0, 0.0, true);
+    let mut last = None;
+    for pass in 0..options.passes.max(1) {
+        let t0 = std::time::Instant::now();
+        let system = match &best {
+            Some(p) => model.apply(&p[..model.len()]),
+            None => model.system().clone(),
+        };
+        let basis = Basis::render(&system, aperture, frame, light, options.quality)?;
+        basis_ms += t0.elapsed().as_secs_f64() * 1e3;
+        let t1 = std::time::Instant::now();
+        let ev = Evaluator {
+            model,
+            bins: BandBins::of(&basis, &system),
+            reduced: reduce(&basis, target),
+            basis: &basis,
+            fit_gains: options.fit_gains,
+        };
+        let starts: Vec<Vec<f64>> = match (&best, pass) {
+            (Some(p), _) => vec![p.clone()],
+            (None, _) => {
+                let mut starts: Vec<Vec<f64>> = Vec::new();
+                for &(n, q) in &options.starts {
+                    let mut p = model.start(n, q);
+                    if options.fit_gains {
+                        p.extend(ev.best_gains(&p));
+                    }
+                    // Without single layers every start is the designs' nominal one.
+                    if !starts.contains(&p) {
+                        starts.push(p);
+                    }
+                }
+                starts
+            }
+        };
+        let starts: Vec<Vec<f64>> = if best.is_none() {
+            starts.into_iter().map(|s| ev.scan(s, &bounds)).collect()
+        } else {
+            starts
+        };
+        let f = |p: &[f64]| ev.residuals(p);
+        let found = starts
+            .iter()
+            .map(|s| minimise(&f, s, &bounds))
+            .min_by(|a, b| a.cost.total_cmp(&b.cost))
+            .ok_or(CoatingError::NoStart)?;
+        evaluations += found.evaluations;
+        converged = found.converged;
+        fit_ms += t1.elapsed().as_secs_f64() * 1e3;
+        best = Some(found.params.clone());
+        let Evaluator { bins, reduced, .. } = ev;
+        last = Some((basis, bins, reduced, found));
+    }
+    let (basis, bins, reduced, found) = last.expect("at least one pass");
+    let p = found.params;
+    let ev = Evaluator {
+        model,
+        basis: &basis,
+        bins,
+        reduced,
+        fit_gains: options.fit_gains,
+    };
+    // Evaluations per second, measured on the residuals alone.
+    let t = std::time::Instant::now();
+    let mut k = 0;
+    while t.elapsed().as_secs_f64() < 0.2 || k < 3 {
+        std::hint::black_box(ev.residuals(&p));
+        k += 1;
+    }
+    let evaluations_per_s = k as f64 / t.elapsed().as_secs_f64();
+    summarise(
+        &ev,
+        &p,
+        &bounds,
+        target,
+        evaluations,
+        options.passes.max(1),
+        converged,
+        (fit_ms, basis_ms, evaluations_per_s),
+    )
+}
+
+#[allow(clippy::too_many_arguments)]
+fn summarise(
+    ev: &Evaluator<'_>,
+    p: &[f64],
+    bounds: &[Bound],
+    target: &Target,
+    evaluations: usize,
+    passes: usize,
+    converged: bool,
+    (fit_ms, basis_ms, evaluations_per_s): (f64, f64, f64),
+) -> Result<Fit, CoatingError> {
+    let model = ev.model;
+    let names: Vec<String> = model
+        .names()
+        .into_iter()
+        .chain(
+            ev.fit_gains
+                .then(|| ["gain R", "gain G", "gain B"].map(String::from))
+                .into_iter()
+                .flatten(),
+        )
+        .collect();
+    let f = |q: &[f64]| ev.residuals(q);
+    let r = f(p);
+    let sq: f64 = r.iter().map(|v| v * v).sum::<f64>() + ev.reduced.floor;
+    let dof = (3 * ev.reduced.pixels).saturating_sub(p.len()).max(1) as f64;
+    let s2 = sq / dof;
+    // Jacobian in parameters scaled by their ranges (or values), its SVD.
+    let jac = jacobian_at(&f, p, bounds);
+    let scale: Vec<f64> = bounds
+        .iter()
+        .zip(p)
+        .map(|(b, &v)| match b {
+            Bound::Range(lo, hi) => hi - lo,
+            Bound::Positive => v.abs().max(1e-12),
+        })
+        .collect();
+    let js = DMatrix::from_fn(jac.nrows(), jac.ncols(), |i, j| jac[(i, j)] * scale[j]);
+    let jtj = js.transpose() * &js;
+    let eig = jtj.clone().symmetric_eigen();
+    let top = eig.eigenvalues.iter().cloned().fold(0.0, f64::max);
+    let mut unconstrained = Vec::new();
+    let mut free = vec![false; p.len()];
+    let mut inv = DMatrix::zeros(p.len(), p.len());
+    for (k, &lambda) in eig.eigenvalues.iter().enumerate() {
+        let vec = eig.eigenvectors.column(k);
+        if lambda <= NULL_RCOND * top || lambda <= 0.0 {
+            let params: Vec<(String, f64)> = vec
+                .iter()
+                .enumerate()
+                .filter(|(_, w)| w.abs() >= 0.2)
+                .map(|(i, w)| {
+                    free[i] = true;
+                    (names[i].clone(), *w)
+                })
+                .collect();
+            unconstrained.push(Unconstrained {
+                params,
+                relative: (lambda.max(0.0) / top.max(1e-300)).sqrt(),
+            });
+        } else {
+            inv += (vec * vec.transpose()) / lambda;
+        }
+    }
+    // Back to the parameters' own units.
+    let cov = DMatrix::from_fn(p.len(), p.len(), |i, j| {
+        s2 * inv[(i, j)] * scale[i] * scale[j]
+    });
+    let params: Vec<FittedParam> = names
+        .iter()
+        .enumerate()
+        .map(|(i, name)| FittedParam {
+            name: name.clone(),
+            value: p[i],
+            sigma: (!free[i]).then(|| cov[(i, i)].max(0.0).sqrt()),
+            constrained: !free[i],
+        })
+        .collect();
+    // Ghost energies and their errors (the gradient by central differences).
+    let gains = ev.gains(p);
+    let colours = ev.colours(p).ok_or(CoatingError::Colours)?;
+    let energies = ghost_energies(ev.basis, &colours, gains);
+    let total = |q: &[f64]| -> Vec<f64> {
+        match ev.colours(q) {
+            Some(c) => ghost_energies(ev.basis, &c, ev.gains(q))
+                .iter()
+                .map(|e| e.iter().sum())
+                .collect(),
+            None => vec![f64::NAN; energies.len()],
+        }
+    };
+    let grad = jacobian_at(&total, p, bounds);
+    let image = model_image(ev.basis, &colours, gains);
+    let residual_of = residual_per_ghost(ev.basis, &colours, gains, &image, target);
+    let ghosts = ev
+        .basis
+        .ghosts
+        .iter()
+        .enumerate()
+        .map(|(g, gb)| {
+            let e: f64 = energies[g].iter().sum();
+            let row = grad.row(g).transpose();
+            // A direction the image does not see moves the energy without bound.
+            let free_moves = free
+                .iter()
+                .enumerate()
+                .any(|(i, &f)| f && row[i].abs() * scale[i] > 1e-9 * e.abs());
+            let var = (row.transpose() * &cov * &row)[(0, 0)];
+            let rel = if free_moves || e <= 0.0 {
+                f64::INFINITY
+            } else {
+                var.max(0.0).sqrt() / e
+            };
+            FittedGhost {
+                path: gb.path.to_string(),
+                energy: energies[g],
+                relative_sigma: rel,
+                constrained: rel <= CONSTRAINED_ENERGY,
+                residual: residual_of[g],
+            }
+        })
+        .collect();
+    let counted: Vec<usize> = (0..target.mask.len()).filter(|&i| target.mask[i]).collect();
+    let (mut num, mut den) = (0.0, 0.0);
+    for &i in &counted {
+        for ch in 0..3 {
+            let (m, y) = (
+                f64::from(image.pixels[i][ch]),
+                f64::from(target.image.pixels[i][ch]),
+            );
+            num += (m - y) * (m - y);
+            den += y * y;
+        }
+    }
+    let _ = ev.reduced.yy;
+    Ok(Fit {
+        params,
+        gains,
+        ghosts,
+        unconstrained,
+        relative_rmse: if den > 0.0 { (num / den).sqrt() } else { 0.0 },
+        pixels_counted: counted.len(),
+        band_images: ev.basis.band_count(),
+        evaluations,
+        passes,
+        converged,
+        fit_ms,
+        basis_ms,
+        evaluations_per_s,
+        system: model.apply(&p[..model.len()]),
+        image,
+        basis: ev.basis.clone(),
+        raw: p.to_vec(),
+    })
+}
+
+/// The model image: every band image times its colour and the gains.
+pub fn model_image(basis: &Basis, colours: &[[f64; 3]], gains: [f64; 3]) -> HdrImage {
+    let (w, h) = (basis.frame.width, basis.frame.height);
+    let mut img = HdrImage::new(w, h);
+    let mut c = colours.iter();
+    for g in &basis.ghosts {
+        for b in &g.bands {
+            let col = c.next().expect("one colour per band image");
+            let k: [f32; 3] = std::array::from_fn(|ch| (col[ch] * gains[ch]) as f32);
+            for y in 0..b.h {
+                let row = &mut img.pixels[(b.y0 + y) * w + b.x0..(b.y0 + y) * w + b.x0 + b.w];
+                for (o, &s) in row.iter_mut().zip(&b.pixels[y * b.w..(y + 1) * b.w]) {
+                    for ch in 0..3 {
+                        o[ch] += s * k[ch];
+                    }
+                }
+            }
+        }
+    }
+    img
+}
+
+/// Per ghost: the image's residual (model − target, summed over channels) over the counted
+/// pixels where the ghost is at least half its own peak, over the ghost's light there.
+fn residual_per_ghost(
+    basis: &Basis,
+    colours: &[[f64; 3]],
+    gains: [f64; 3],
+    image: &HdrImage,
+    target: &Target,
+) -> Vec<Option<f64>> {
+    let w = basis.frame.width;
+    let mut c = colours.iter();
+    basis
+        .ghosts
+        .iter()
+        .map(|g| {
+            // The ghost's own image (sum of channels) over the union of its bands' boxes.
+            let cols: Vec<f64> = g
+                .bands
+                .iter()
+                .map(|_| {
+                    let col = c.next().expect("one colour per band image");
+                    (0..3).map(|ch| col[ch] * gains[ch]).sum()
+                })
+                .collect();
+            let x0 = g.bands.iter().map(|b| b.x0).min()?;
+            let y0 = g.bands.iter().map(|b| b.y0).min()?;
+            let x1 = g.bands.iter().map(|b| b.x0 + b.w).max()?;
+            let y1 = g.bands.iter().map(|b| b.y0 + b.h).max()?;
+            let own = |x: usize, y: usize| -> f64 {
+                g.bands
+                    .iter()
+                    .zip(&cols)
+                    .map(|(b, k)| f64::from(b.at(x, y)) * k)
+                    .sum()
+            };
+            let mut peak: f64 = 0.0;
+            for y in y0..y1 {
+                for x in x0..x1 {
+                    peak = peak.max(own(x, y));
+                }
+            }
+            let (mut res, mut light) = (0.0, 0.0);
+            for y in y0..y1 {
+                for x in x0..x1 {
+                    let o = own(x, y);
+                    if o >= 0.5 * peak && target.mask[y * w + x] {
+                        let i = y * w + x;
+                        res += (0..3)
+                            .map(|ch| {
+                                f64::from(image.pixels[i][ch])
+                                    - f64::from(target.image.pixels[i][ch])
+                            })
+                            .sum::<f64>();
+                        light += o;
+                    }
+                }
+            }
+            (light > 0.0).then(|| res / light)
+        })
+        .collect()
+}

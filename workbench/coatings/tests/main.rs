@@ -1,0 +1,4 @@
+//! The coatings crate's tests, one binary (docs/tests.md).
+
+mod catalogue;
+mod fit;
