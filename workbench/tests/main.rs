@@ -19,6 +19,7 @@ mod edit_document;
 mod edit_robustness;
 #[cfg(feature = "tui")]
 mod edit_tmux;
+mod fit;
 mod gallery;
 mod golden;
 mod gpu;

@@ -257,6 +257,27 @@ impl InterfaceTableSet {
         InterfaceTableSet { lambda_nm, tables }
     }
 
+    /// These tables with the reflectance of light meeting `surface` travelling `forward`
+    /// replaced by `f` of the cosine of incidence (its transmittance kept): a renderer traced
+    /// with them weighs each ray by `f` where it reflects there. `None` when `surface` has no
+    /// tables. (A coating fit renders a ghost with `f` a hat function of the angle, to know
+    /// how its light splits over angles of incidence.)
+    pub fn with_reflectance(
+        &self,
+        surface: usize,
+        forward: bool,
+        f: impl Fn(f64) -> f64,
+    ) -> Option<InterfaceTableSet> {
+        let mut out = self.clone();
+        let set = out.tables.get_mut(surface)?.as_mut()?;
+        let table = &mut set[if forward { 1 } else { 3 }];
+        let k = table.k;
+        for (j, v) in table.values.iter_mut().enumerate() {
+            *v = f(entry_cos(j, k));
+        }
+        Some(out)
+    }
+
     /// The table for light meeting `surface` travelling `forward` (toward the sensor) and
     /// doing `interaction`.
     pub fn get(

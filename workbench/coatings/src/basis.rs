@@ -1,36 +1,71 @@
-//! Each ghost's image at each of its traced bands, with its colour divided out: what any
-//! choice of coatings re-weights.
+//! Each ghost's image at each of its traced bands, split by the angles of incidence at its two
+//! reflections, with its transmission divided out: what any choice of coatings re-weights.
 //!
-//! A ghost's image at one band is its traced geometry times, per ray, the throughput of its
-//! path at that ray's angles. Coatings change the throughput, not the geometry. Divided by the
-//! path's throughput at normal incidence at the band's centre, the image keeps only how the
-//! throughput varies with the rays' angles, which coatings change little; multiplied by the
-//! light the path carries over the band under other coatings
-//! (`GhostColours::bin_light`), it is the ghost's image under those coatings. [`Basis::render`]
-//! renders the band images once (every ghost with light, none culled as dim: a ghost dim
-//! under one set of coatings may be bright under another); a fit or a choice of coatings
-//! then costs a few products per band, not a render. The approximation is exact for the
-//! coatings the basis was rendered with, and re-rendering the basis with a fit's coatings
-//! removes it at the fit's solution (`crate::fit`).
+//! A ghost's image at one band is its traced geometry times, per ray, its path's throughput:
+//! the transmittances of the surfaces it crosses and the reflectances of the two it reflects
+//! at, each at the ray's angle there. Coatings change the factors, not the geometry. A coating's
+//! reflectance varies with the angle of incidence steeply near its minimum (a ghost of a fast
+//! lens meets its surfaces at 0–40°), so the basis keeps that variation: each band is rendered
+//! once per pair of hat functions of the two reflections' incidence cosines
+//! ([`NODE_DEG`]: piecewise linear in `cos² θ`, one at a node and zero at the next), their sum
+//! being the
+//! ghost's image with both reflectances replaced by their interpolation between the nodes.
+//! Divided by the path's transmission at normal incidence at the band's centre, each such
+//! image times `Σ w(λ) T(λ) R₁(θᵢ, λ) R₂(θⱼ, λ)` over the band's bin (the light's weights,
+//! the path's normal transmission and the two reflectances at the pair's nodes, in 5 nm
+//! cells: `crate::reweight`) is the ghost's image under other coatings. What is left out is
+//! how the transmittances vary with the angle, which moves a ghost's light by a fraction of
+//! the surfaces' reflectance changes. [`Basis::render`] renders the images once (every ghost
+//! with light, none culled as dim: a ghost dim under one set of coatings may be bright under
+//! another); a fit or a choice of coatings then costs a few products per image, not a render.
 
 use flarebench_sdk::LensSystem;
 use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::frame::Frame;
 use flarebench_sdk::ghost::GhostPath;
+use flarebench_sdk::ghost::context::Band;
 use flarebench_sdk::image::HdrImage;
-use ghost_raytrace::colour::Bin;
+use ghost_raytrace::colour::{Bin, surface_factors};
 use ghost_raytrace::ghosts::{RenderOptions, render_each_ghost};
 use ghost_raytrace::plan::{GhostBand, GhostJob, PlanOptions, plan};
 use ghost_raytrace::scene::{LightSpec, Quality};
+use std::sync::Arc;
 
 use crate::CoatingError;
+use crate::reweight::transmission;
 
-/// One band of one ghost: its image over its bounding box, per unit of the light the path
-/// carries over the band.
+/// Angles of incidence (degrees) of the nodes of the hat functions a ghost's two reflections
+/// are split by.
+pub const NODE_DEG: [f64; 7] = [0.0, 10.0, 20.0, 30.0, 40.0, 55.0, 90.0];
+
+/// The nodes' cosines, from normal incidence (1) to grazing (0).
+pub fn node_cos() -> [f64; NODE_DEG.len()] {
+    NODE_DEG.map(|d: f64| if d >= 90.0 { 0.0 } else { d.to_radians().cos() })
+}
+
+/// Hat function `i` of the incidence cosine `c`: 1 at node `i`, linear in `cos² θ` to 0 at
+/// its neighbours; the hats sum to 1 everywhere in [0, 1]. Linear in `cos² θ = 1 − sin² θ`
+/// because a coating's reflectance starts from normal incidence as `R₀ + a sin² θ`.
+pub fn hat(i: usize, c: f64) -> f64 {
+    let n = node_cos().map(|c| c * c);
+    let v = c.clamp(0.0, 1.0).powi(2);
+    if i > 0 && v >= n[i] && v <= n[i - 1] {
+        (n[i - 1] - v) / (n[i - 1] - n[i])
+    } else if i + 1 < n.len() && v >= n[i + 1] && v <= n[i] {
+        (v - n[i + 1]) / (n[i] - n[i + 1])
+    } else {
+        0.0
+    }
+}
+
+/// One band of one ghost, for one pair of hats: its image over its bounding box, per unit of
+/// the light its path carries over the band.
 #[derive(Clone, Debug)]
 pub struct BandImage {
     /// Bin `bin` of the ghost's `m` equal bins over 380–780 nm.
     pub bin: usize,
+    /// The hats ([`hat`]) of its first and second reflection.
+    pub hats: (usize, usize),
     /// The box (pixels) the image covers: columns `x0..x0 + w`, rows `y0..y0 + h`.
     pub x0: usize,
     pub y0: usize,
@@ -81,32 +116,59 @@ impl Basis {
     ) -> Result<Basis, CoatingError> {
         let mut opts = PlanOptions::for_quality(quality, None);
         opts.cull = false;
-        let plans = plan(system, std::slice::from_ref(light), &frame, &opts)?;
+        Self::render_planned(system, aperture, frame, light, &opts)
+    }
+
+    /// [`Basis::render`] planned with `opts` (culling as they say).
+    pub fn render_planned(
+        system: &LensSystem,
+        aperture: &Aperture,
+        frame: Frame,
+        light: &LightSpec,
+        opts: &PlanOptions<'_>,
+    ) -> Result<Basis, CoatingError> {
+        let plans = plan(system, std::slice::from_ref(light), &frame, opts)?;
         let Some(mut lp) = plans.into_iter().next() else {
             return Err(CoatingError::NoLight);
         };
-        // One job per ghost band, in its colour of one.
-        let jobs: Vec<(GhostPath, usize, usize)> = lp
-            .ghosts
-            .iter()
-            .flat_map(|g| {
-                let m = g.bands.len();
-                (0..m).map(move |i| (g.path, m, i))
-            })
-            .collect();
-        lp.ghosts = lp
-            .ghosts
-            .iter()
-            .flat_map(|g| {
-                g.bands.iter().map(|b| GhostJob {
-                    bands: vec![GhostBand {
-                        band: b.band,
-                        rgb: [1.0; 3],
-                    }],
-                    ..g.clone()
-                })
-            })
-            .collect();
+        // One job per ghost band and pair of hats, in a colour of one, each with its own
+        // tables (the band's, with the two reflections' reflectances replaced by the hats).
+        let nodes = node_cos().len();
+        let mut jobs: Vec<(GhostPath, usize, usize, (usize, usize))> = Vec::new();
+        let mut ghost_jobs = Vec::new();
+        let mut bands = lp.bands.clone();
+        for g in &lp.ghosts {
+            let m = g.bands.len();
+            let (a, b) = (g.path.first(), g.path.second());
+            for (i, gb) in g.bands.iter().enumerate() {
+                let base = &lp.bands[gb.band];
+                for h1 in 0..nodes {
+                    let Some(first) = base.tables.with_reflectance(a, true, |c| hat(h1, c)) else {
+                        continue;
+                    };
+                    for h2 in 0..nodes {
+                        let Some(tables) = first.with_reflectance(b, false, |c| hat(h2, c)) else {
+                            continue;
+                        };
+                        bands.push(Band {
+                            lambda_nm: base.lambda_nm,
+                            rgb: [0.0; 3],
+                            tables: Arc::new(tables),
+                        });
+                        ghost_jobs.push(GhostJob {
+                            bands: vec![GhostBand {
+                                band: bands.len() - 1,
+                                rgb: [1.0; 3],
+                            }],
+                            ..g.clone()
+                        });
+                        jobs.push((g.path, m, i, (h1, h2)));
+                    }
+                }
+            }
+        }
+        lp.bands = bands;
+        lp.ghosts = ghost_jobs;
         let options = RenderOptions {
             band_by_band: true,
             ..RenderOptions::default()
@@ -119,13 +181,16 @@ impl Basis {
             options,
             |_, _, img| crop(img),
         )?;
+        let sensor = system.sensor_index();
         let mut ghosts: Vec<GhostBasis> = Vec::new();
-        for ((path, m, i), image) in jobs.into_iter().zip(images) {
-            let t0 = Bin::new(system, m, i).throughput(path, system);
+        for ((path, m, i, hats), image) in jobs.into_iter().zip(images) {
+            let centre = Bin::new(system, m, i).centre_nm;
+            let t0 = transmission(path, &surface_factors(system, centre), sensor);
             let Some(mut band) = image.filter(|_| t0 > 0.0 && t0.is_finite()) else {
                 continue;
             };
             band.bin = i;
+            band.hats = hats;
             let scale = (1.0 / t0) as f32;
             band.pixels.iter_mut().for_each(|p| *p *= scale);
             band.sum = band.pixels.iter().map(|&p| f64::from(p)).sum();
@@ -176,6 +241,7 @@ fn crop(img: &HdrImage) -> Option<BandImage> {
     }
     Some(BandImage {
         bin: 0,
+        hats: (0, 0),
         x0,
         y0,
         w: bw,

@@ -30,7 +30,8 @@ use serde::Serialize;
 
 use crate::CoatingError;
 use crate::basis::Basis;
-use crate::model::{BandBins, CoatingModel, ghost_energies};
+use crate::model::{CoatingModel, Family, ghost_energies};
+use crate::reweight::Reweighter;
 use crate::solve::{Bound, jacobian_at, minimise};
 
 /// Singular values of the scaled `JᵀJ` below this fraction of the largest mark directions the
@@ -40,10 +41,16 @@ pub const NULL_RCOND: f64 = 1e-8;
 /// fraction of it.
 pub const CONSTRAINED_ENERGY: f64 = 0.01;
 
-/// Values a parameter takes across its bounds in the surface-by-surface scan of a start.
+/// Values a parameter takes across its bounds in the surface-by-surface scan of a start: a
+/// surface of one parameter takes [`SCAN_STEPS`]², one of two [`SCAN_STEPS`] by
+/// [`SCAN_STEPS`] (a single layer's index by its quarter-wave wavelength, 8 × 24).
 pub const SCAN_STEPS: usize = 12;
+const PRIMES: [u32; 16] = [2, 3, 5, 7, 11, 13, 17, 19, 23, 29, 31, 37, 41, 43, 47, 53];
+
+/// Scan-and-solve rounds after the first solution, while each lowers the cost.
+pub const MAX_RESCANS: usize = 2;
 /// Rounds of that scan over the surfaces.
-pub const SCAN_ROUNDS: usize = 3;
+pub const SCAN_ROUNDS: usize = 2;
 
 fn surface_params(model: &CoatingModel, s: &crate::model::ModelSurface) -> usize {
     model
@@ -73,6 +80,12 @@ pub struct FitOptions {
     pub passes: usize,
     /// Starts of the first pass: (index, quarter-wave nm) of every single layer.
     pub starts: Vec<(f64, f64)>,
+    /// Starts spread over the bounds of the coatings' parameters, each solved from without
+    /// the scan (besides `starts`).
+    pub spread_starts: usize,
+    /// Start from these parameters (coatings, then the gains when fitted) instead, without
+    /// the scan.
+    pub initial: Option<Vec<f64>>,
 }
 
 impl Default for FitOptions {
@@ -80,8 +93,10 @@ impl Default for FitOptions {
         FitOptions {
             quality: Quality::Default,
             fit_gains: true,
-            passes: 2,
+            passes: 3,
             starts: vec![(1.38, 450.0), (1.38, 550.0), (1.38, 650.0), (1.6, 550.0)],
+            spread_starts: 8,
+            initial: None,
         }
     }
 }
@@ -130,6 +145,8 @@ pub struct Fit {
     pub unconstrained: Vec<Unconstrained>,
     /// RMS of the residual over the counted pixels, over the RMS of the image there.
     pub relative_rmse: f64,
+    /// The squared residual over the counted pixels and channels.
+    pub residual_sq: f64,
     pub pixels_counted: usize,
     pub band_images: usize,
     pub evaluations: usize,
@@ -248,7 +265,7 @@ fn reduce(basis: &Basis, target: &Target) -> Reduced {
 struct Evaluator<'a> {
     model: &'a CoatingModel,
     basis: &'a Basis,
-    bins: BandBins,
+    bins: Reweighter,
     reduced: Reduced,
     fit_gains: bool,
 }
@@ -265,15 +282,19 @@ impl Evaluator<'_> {
 
     fn colours(&self, p: &[f64]) -> Option<Vec<[f64; 3]>> {
         let sys = self.model.apply(&p[..self.model.len()]);
-        self.bins.colours(self.basis, &sys).ok()
+        Some(self.bins.colours(&sys))
     }
 
     fn residuals(&self, p: &[f64]) -> Vec<f64> {
+        match self.colours(p) {
+            Some(c) => self.residuals_of(&c, self.gains(p)),
+            None => vec![f64::NAN; 3 * self.reduced.z[0].len()],
+        }
+    }
+
+    /// The residuals of colours `c` (in the basis's order) under gains `g`.
+    fn residuals_of(&self, c: &[[f64; 3]], g: [f64; 3]) -> Vec<f64> {
         let n = self.reduced.z[0].len();
-        let g = self.gains(p);
-        let Some(c) = self.colours(p) else {
-            return vec![f64::NAN; 3 * n];
-        };
         let mut r = Vec::with_capacity(3 * n);
         for ch in 0..3 {
             let cv = DVector::from_iterator(n, c.iter().map(|c| c[ch] * g[ch]));
@@ -285,16 +306,22 @@ impl Evaluator<'_> {
 
     /// Half the squared residual at `p` with the gains that fit best there.
     fn cost_with_best_gains(&self, p: &mut [f64]) -> f64 {
-        if self.fit_gains {
-            let g = self.best_gains(p);
+        let Some(c) = self.colours(p) else {
+            return f64::INFINITY;
+        };
+        let g = if self.fit_gains {
+            let g = self.best_gains_of(&c);
             let k = self.model.len();
             p[k..k + 3].copy_from_slice(&g);
-        }
-        0.5 * self.residuals(p).iter().map(|v| v * v).sum::<f64>()
+            g
+        } else {
+            [1.0; 3]
+        };
+        0.5 * self.residuals_of(&c, g).iter().map(|v| v * v).sum::<f64>()
     }
 
     /// A start improved surface by surface: each surface's parameters in turn over a grid
-    /// of [`SCAN_STEPS`] values a parameter across its bounds (the others held, the gains
+    /// across their bounds ([`SCAN_STEPS`]) (the others held, the gains
     /// the best for each), the best kept; [`SCAN_ROUNDS`] rounds over the surfaces. A single
     /// layer's reflectance is periodic in its thickness, so a local solver from one start
     /// stops in whichever valley it starts in; the scan finds each surface's valley.
@@ -306,11 +333,18 @@ impl Evaluator<'_> {
                 if range.is_empty() || range.len() > 2 {
                     continue;
                 }
+                let steps = |k: usize| match (range.len(), k) {
+                    (1, _) => SCAN_STEPS * SCAN_STEPS,
+                    (_, 0) if s.family == Family::Single => SCAN_STEPS / 2,
+                    _ if s.family == Family::Single => SCAN_STEPS * 3 / 2,
+                    _ => SCAN_STEPS,
+                };
                 let axes: Vec<Vec<f64>> = range
                     .clone()
-                    .map(|i| match bounds[i] {
-                        Bound::Range(lo, hi) => (0..SCAN_STEPS)
-                            .map(|k| lo + (hi - lo) * (k as f64 + 0.5) / SCAN_STEPS as f64)
+                    .enumerate()
+                    .map(|(k, i)| match bounds[i] {
+                        Bound::Range(lo, hi) => (0..steps(k))
+                            .map(|j| lo + (hi - lo) * (j as f64 + 0.5) / steps(k) as f64)
                             .collect(),
                         Bound::Positive => vec![p[i]],
                     })
@@ -342,9 +376,11 @@ impl Evaluator<'_> {
 
     /// Per channel, the gains that fit best for the coatings of `p` (linear least squares).
     fn best_gains(&self, p: &[f64]) -> [f64; 3] {
-        let Some(c) = self.colours(p) else {
-            return [1.0; 3];
-        };
+        self.colours(p).map_or([1.0; 3], |c| self.best_gains_of(&c))
+    }
+
+    /// Per channel, the gains that fit best for colours `c`.
+    fn best_gains_of(&self, c: &[[f64; 3]]) -> [f64; 3] {
         let n = self.reduced.z[0].len();
         std::array::from_fn(|ch| {
             let cv = DVector::from_iterator(n, c.iter().map(|c| c[ch]));
@@ -358,6 +394,37 @@ impl Evaluator<'_> {
             }
         })
     }
+}
+
+/// Starts spread over the bounds' box of the coatings' parameters (an additive recurrence with
+/// the square roots of primes: the same each run), each with its best gains.
+fn spread_starts(
+    model: &CoatingModel,
+    bounds: &[Bound],
+    ev: &Evaluator<'_>,
+    options: &FitOptions,
+) -> Vec<Vec<f64>> {
+    let k = model.len();
+    (1..=options.spread_starts)
+        .map(|j| {
+            let mut p: Vec<f64> = bounds[..k]
+                .iter()
+                .enumerate()
+                .map(|(d, b)| {
+                    let a = f64::from(PRIMES[d % PRIMES.len()]).sqrt().fract();
+                    let t = (j as f64 * a + 0.5 * (d / PRIMES.len()) as f64).fract();
+                    match *b {
+                        Bound::Range(lo, hi) => lo + (hi - lo) * t,
+                        Bound::Positive => 1.0,
+                    }
+                })
+                .collect();
+            if options.fit_gains {
+                p.extend(ev.best_gains(&p));
+            }
+            p
+        })
+        .collect()
 }
 
 /// Fits `model`'s coatings (and the gains) to `target`, rendering the basis with `aperture`
@@ -381,7 +448,8 @@ pub fn fit(
     if options.fit_gains {
         bounds.extend([Bound::Positive; 3]);
     }
-    let mut best: Option<Vec<f64>> = None;
+    let mut best: Option<Vec<f64>> = options.initial.clone();
+    let scan = best.is_none();
     let (mut evaluations, mut fit_ms, mut basis_ms, mut converged) = (0, 0.0, 0.0, true);
     let mut last = None;
     for pass in 0..options.passes.max(1) {
@@ -395,7 +463,7 @@ pub fn fit(
         let t1 = std::time::Instant::now();
         let ev = Evaluator {
             model,
-            bins: BandBins::of(&basis, &system),
+            bins: Reweighter::new(&basis, &system)?,
             reduced: reduce(&basis, target),
             basis: &basis,
             fit_gains: options.fit_gains,
@@ -414,21 +482,42 @@ pub fn fit(
                         starts.push(p);
                     }
                 }
+                starts.extend(spread_starts(model, &bounds, &ev, options));
                 starts
             }
         };
-        let starts: Vec<Vec<f64>> = if best.is_none() {
-            starts.into_iter().map(|s| ev.scan(s, &bounds)).collect()
-        } else {
-            starts
-        };
         let f = |p: &[f64]| ev.residuals(p);
-        let found = starts
-            .iter()
-            .map(|s| minimise(&f, s, &bounds))
+        let structured = options.starts.len();
+        let tried: Vec<_> = starts
+            .into_par_iter()
+            .enumerate()
+            .map(|(i, s)| {
+                let s = if scan && pass == 0 && i < structured {
+                    ev.scan(s, &bounds)
+                } else {
+                    s
+                };
+                minimise(&f, &s, &bounds)
+            })
+            .collect();
+        evaluations += tried.iter().map(|m| m.evaluations).sum::<usize>();
+        let mut found = tried
+            .into_iter()
             .min_by(|a, b| a.cost.total_cmp(&b.cost))
             .ok_or(CoatingError::NoStart)?;
-        evaluations += found.evaluations;
+        // Scan from the solution and solve again while that lowers the cost: the solver
+        // stops in a valley of the joint problem that a surface's scan can leave.
+        if scan {
+            for _ in 0..MAX_RESCANS {
+                let again = minimise(&f, &ev.scan(found.params.clone(), &bounds), &bounds);
+                let better = again.cost < found.cost * (1.0 - 1e-6);
+                evaluations += again.evaluations;
+                if !better {
+                    break;
+                }
+                found = again;
+            }
+        }
         converged = found.converged;
         fit_ms += t1.elapsed().as_secs_f64() * 1e3;
         best = Some(found.params.clone());
@@ -605,6 +694,7 @@ fn summarise(
         ghosts,
         unconstrained,
         relative_rmse: if den > 0.0 { (num / den).sqrt() } else { 0.0 },
+        residual_sq: num,
         pixels_counted: counted.len(),
         band_images: ev.basis.band_count(),
         evaluations,

@@ -8,12 +8,14 @@
 //!   multicoat), their layers for a surface's glass, and their cost ranks.
 //! - [`fit`]: the coatings, and the light's intensity and colour, that reproduce a linear
 //!   image of a lens's flare, with uncertainties and what the image does not constrain.
+//! - [`reweight`]: the colours a basis's images take under given coatings.
 //! - [`solve`]: the bounded Levenberg–Marquardt both use.
 
 pub mod basis;
 pub mod catalogue;
 pub mod fit;
 pub mod model;
+pub mod reweight;
 pub mod solve;
 
 use ghost_raytrace::GhostRenderError;

@@ -4,7 +4,6 @@
 
 use flarebench_sdk::coating::CoatingLayer;
 use flarebench_sdk::{Coating, LensSystem};
-use ghost_raytrace::colour::{Bin, GhostColours};
 use serde::Serialize;
 
 use crate::CoatingError;
@@ -218,45 +217,6 @@ impl CoatingModel {
             sys.surfaces[s.coatable.surface].coating = self.coating(s, params);
         }
         sys
-    }
-}
-
-/// The bins of a basis's band images, in its order, made once: only their edges count for
-/// the colours.
-#[derive(Clone, Debug)]
-pub struct BandBins {
-    bins: Vec<Bin>,
-}
-
-impl BandBins {
-    pub fn of(basis: &Basis, system: &LensSystem) -> BandBins {
-        BandBins {
-            bins: basis
-                .ghosts
-                .iter()
-                .flat_map(|g| g.bands.iter().map(|b| Bin::new(system, g.bins, b.bin)))
-                .collect(),
-        }
-    }
-
-    /// Every band image's colour (the light its path carries over its bin, per channel)
-    /// for `system`'s coatings, in the basis's order.
-    pub fn colours(
-        &self,
-        basis: &Basis,
-        system: &LensSystem,
-    ) -> Result<Vec<[f64; 3]>, CoatingError> {
-        let light = &basis.light;
-        let colours = GhostColours::new(system, light.spectrum, light.intensity as f32)?;
-        let mut bins = self.bins.iter();
-        let mut out = Vec::with_capacity(self.bins.len());
-        for g in &basis.ghosts {
-            for _ in &g.bands {
-                let bin = bins.next().expect("one bin per band image");
-                out.push(colours.bin_light(g.path, bin));
-            }
-        }
-        Ok(out)
     }
 }
 

@@ -1,6 +1,6 @@
 //! Bounded nonlinear least squares: MINPACK's Levenberg–Marquardt (the `levenberg-marquardt`
-//! crate) on parameters mapped into their bounds, with the Jacobian by central differences
-//! (its columns computed in parallel).
+//! crate) on parameters mapped into their bounds, with the Jacobian by finite differences
+//! (forward differences, its columns computed in parallel).
 //!
 //! A parameter bounded to `[lo, hi]` is `lo + (hi − lo)(1 + sin u)/2` of a free `u` (the
 //! mapping MINUIT uses); a positive one is `e^u`. The solver sees only `u`.
@@ -131,7 +131,9 @@ pub fn minimise(f: &Residuals<'_>, start: &[f64], bounds: &[Bound]) -> Minimum {
         evaluations: 0.into(),
     };
     let (problem, report) = LevenbergMarquardt::new()
-        .with_patience(200)
+        .with_patience(100)
+        .with_ftol(1e-10)
+        .with_xtol(1e-9)
         .minimize(problem);
     let params = problem.params_of(problem.u.as_slice());
     let r = f(&params);

@@ -2,8 +2,9 @@
 //! noise and a clipped light, fitted back.
 
 use flarebench_coatings::basis::Basis;
-use flarebench_coatings::fit::{FitOptions, Target, fit};
-use flarebench_coatings::model::{BandBins, CoatingModel, Family, ghost_energies};
+use flarebench_coatings::fit::{FitOptions, Target, fit, model_image};
+use flarebench_coatings::model::{CoatingModel, Family, ghost_energies};
+use flarebench_coatings::reweight::Reweighter;
 use flarebench_sdk::LensSystem;
 use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::frame::Frame;
@@ -83,16 +84,44 @@ fn recover(stem: &str, family: Family, seed: u64) {
             (i % frame.width) as f32 + 0.5,
             (i / frame.width) as f32 + 0.5,
         );
+        // Noise first, then the sensor's clipping: a clipped pixel reads the clip level.
+        for c in p.iter_mut() {
+            *c += (0.01 * rms * rng.normal()) as f32;
+        }
         if (x - lx).hypot(y - ly) <= 3.0 {
             *p = [clip; 3];
         }
         for c in p.iter_mut() {
-            *c = (*c + (0.01 * rms * rng.normal()) as f32).min(clip);
+            *c = c.min(clip);
         }
         // A pixel at the clip level says only that it is at least that.
         mask[i] = p.iter().all(|&c| c < clip);
     }
     let target = Target { image, mask };
+    if std::env::var("FLAREBENCH_FIT_FROM_TRUTH").is_ok() {
+        // A diagnosis: the fit started at the hidden coatings, where its basis is exact.
+        let mut init = hidden.clone();
+        init.extend([1.0; 3]);
+        let from_truth = fit(
+            &model,
+            &Aperture::Circular,
+            &light,
+            &target,
+            &FitOptions {
+                initial: Some(init),
+                ..FitOptions::default()
+            },
+        )
+        .unwrap();
+        let f = truth(&from_truth.system, frame, &light);
+        eprintln!(
+            "{stem}: from the truth: residual² {:.6e}, rmse {:.4}, render vs truth {:.4}, params {:?}",
+            from_truth.residual_sq,
+            from_truth.relative_rmse,
+            f.relative_rmse(&clean).unwrap(),
+            from_truth.raw
+        );
+    }
     let t = std::time::Instant::now();
     let found = fit(
         &model,
@@ -123,7 +152,10 @@ fn recover(stem: &str, family: Family, seed: u64) {
         out
     };
     let rmse = counted(&fitted).relative_rmse(&counted(&clean)).unwrap();
-    eprintln!("{stem}: fitted lens rendered against the truth, over the counted pixels: {rmse:.4}");
+    eprintln!(
+        "{stem}: fitted lens rendered against the truth, over the counted pixels: {rmse:.4}; residual² {:.6e} params {:?}",
+        found.residual_sq, found.raw
+    );
     assert!(rmse < 0.01, "{stem}: {rmse}");
     // Every ghost the fit reports as constrained within 2% of its hidden energy (a basis
     // rendered with the hidden coatings gives that exactly), and those ghosts carry nearly
@@ -136,9 +168,9 @@ fn recover(stem: &str, family: Family, seed: u64) {
         Quality::Default,
     )
     .unwrap();
-    let colours = BandBins::of(&basis, &hidden_lens)
-        .colours(&basis, &hidden_lens)
-        .unwrap();
+    let colours = Reweighter::new(&basis, &hidden_lens)
+        .unwrap()
+        .colours(&hidden_lens);
     let hidden_energy = ghost_energies(&basis, &colours, [1.0; 3]);
     let total: f64 = hidden_energy.iter().map(|e| e.iter().sum::<f64>()).sum();
     let mut constrained = 0.0;
@@ -163,6 +195,71 @@ fn recover(stem: &str, family: Family, seed: u64) {
 }
 
 #[test]
+#[ignore = "slow tier: a fit from 12 starts over three passes, 15 s; by default the fit of the Heliar's own coatings through `flarebench fit` (workbench/tests/fit.rs)"]
 fn heliar_single_layers_are_recovered() {
     recover("heliar-tronnier", Family::Single, 1);
+}
+
+/// The basis re-weighted follows the renderer: for the coatings it was rendered with within
+/// 1–2% (the renderer applies a ray's angle factor at its band's centre to the whole band, the
+/// basis its reflectances' at every 5 nm), and for other coatings within what the angle split
+/// leaves out besides (the transmittances' variation with the angle): on the Heliar and the
+/// double Gauss, from their own coatings and from MgF₂ everywhere to random single layers, at
+/// 12° (and 3° on the Heliar).
+#[test]
+fn the_basis_reweighted_follows_the_renderer() {
+    reweighted_follows_the_renderer("heliar-tronnier", 0.01, 0.01);
+}
+
+/// [`the_basis_reweighted_follows_the_renderer`] on the double Gauss.
+#[test]
+#[ignore = "slow tier: 49 renders a band image on a 9-surface lens, 15 s; by default the Heliar"]
+fn the_basis_reweighted_follows_the_renderer_on_the_double_gauss() {
+    reweighted_follows_the_renderer("double-gauss-50mm", 0.02, 0.05);
+}
+
+fn reweighted_follows_the_renderer(stem: &str, own_limit: f64, limit: f64) {
+    {
+        let lens = load_lens(stem);
+        let model = CoatingModel::new(&lens, |_| Family::Single).unwrap();
+        let mut rng = Rng(2);
+        let hidden: Vec<f64> = model
+            .bounds()
+            .iter()
+            .map(|b| match b {
+                flarebench_coatings::solve::Bound::Range(lo, hi) => {
+                    lo + (hi - lo) * (0.25 + 0.5 * rng.next())
+                }
+                flarebench_coatings::solve::Bound::Positive => 1.0,
+            })
+            .collect();
+        let b_lens = model.apply(&hidden);
+        let frame = Frame::across_film(120, 80, lens.film_width_mm);
+        let lights: &[&str] = if stem == "heliar-tronnier" {
+            &["12,30,40", "3,30,40"]
+        } else {
+            &["12,30,40"]
+        };
+        for light in lights {
+            let light = LightSpec::parse(light).unwrap();
+            let t = truth(&b_lens, frame, &light);
+            for a_lens in [lens.clone(), model.apply(&model.start(1.38, 550.0))] {
+                let basis = Basis::render(
+                    &a_lens,
+                    &Aperture::Circular,
+                    frame,
+                    &light,
+                    Quality::Default,
+                )
+                .unwrap();
+                let rw = Reweighter::new(&basis, &a_lens).unwrap();
+                let own = model_image(&basis, &rw.colours(&a_lens), [1.0; 3]);
+                let own_err = own.relative_rmse(&truth(&a_lens, frame, &light)).unwrap();
+                assert!(own_err < own_limit, "{stem}: own coatings {own_err}");
+                let img = model_image(&basis, &rw.colours(&b_lens), [1.0; 3]);
+                let err = img.relative_rmse(&t).unwrap();
+                assert!(err < limit, "{stem} at {}°: {err}", light.theta_deg);
+            }
+        }
+    }
 }

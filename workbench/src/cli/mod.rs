@@ -8,6 +8,7 @@ mod crosscheck;
 mod curate;
 #[cfg(feature = "tui")]
 mod edit;
+mod fit;
 mod gallery;
 mod info;
 mod lenses;
@@ -51,6 +52,9 @@ pub enum Command {
     Render(render::RenderArgs),
     /// Find the bright lights in an image and add the lens's flare to it.
     Apply(apply::ApplyArgs),
+    /// Fit a lens's coatings, and the light's intensity and colour, to a linear image of its
+    /// flare.
+    Fit(fit::FitArgs),
     /// Trace one collimated ray through a lens and show every surface it meets.
     Trace(trace::TraceArgs),
     /// Time ghost rendering per lens and quality preset, with the error against the reference.
@@ -96,6 +100,7 @@ pub fn main() -> ExitCode {
         Command::Trace(a) => trace::run(a, cli.quiet),
         Command::Render(a) => render::run(a, cli.quiet),
         Command::Apply(a) => apply::run(a, cli.quiet),
+        Command::Fit(a) => fit::run(a, cli.quiet),
         Command::Precompute(a) => precompute::run(a, cli.quiet),
         Command::Convert(a) => convert::run(a, cli.quiet),
         Command::Plugins(a) => plugins::run(a, cli.quiet),
