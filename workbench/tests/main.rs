@@ -9,6 +9,7 @@ mod common;
 mod offscreen_viewer;
 
 mod cli;
+mod coatings;
 mod convert;
 #[cfg(feature = "tui")]
 mod edit_app;

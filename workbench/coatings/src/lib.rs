@@ -6,6 +6,8 @@
 //!
 //! - [`catalogue`]: the anti-reflection designs a surface can take (bare to a six-layer
 //!   multicoat), their layers for a surface's glass, and their cost ranks.
+//! - [`choice`]: each surface's design from the catalogue that cuts the flare over a set of
+//!   light angles, within a budget of premium surfaces.
 //! - [`fit`]: the coatings, and the light's intensity and colour, that reproduce a linear
 //!   image of a lens's flare, with uncertainties and what the image does not constrain.
 //! - [`reweight`]: the colours a basis's images take under given coatings.
@@ -13,6 +15,7 @@
 
 pub mod basis;
 pub mod catalogue;
+pub mod choice;
 pub mod fit;
 pub mod model;
 pub mod reweight;

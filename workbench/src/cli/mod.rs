@@ -2,6 +2,7 @@
 
 mod apply;
 mod bench;
+mod coatings;
 mod compare;
 mod convert;
 mod crosscheck;
@@ -55,6 +56,9 @@ pub enum Command {
     /// Fit a lens's coatings, and the light's intensity and colour, to a linear image of its
     /// flare.
     Fit(fit::FitArgs),
+    /// Choose each surface's anti-reflection coating from a catalogue to cut the lens's
+    /// flare.
+    Coatings(coatings::CoatingsArgs),
     /// Trace one collimated ray through a lens and show every surface it meets.
     Trace(trace::TraceArgs),
     /// Time ghost rendering per lens and quality preset, with the error against the reference.
@@ -101,6 +105,7 @@ pub fn main() -> ExitCode {
         Command::Render(a) => render::run(a, cli.quiet),
         Command::Apply(a) => apply::run(a, cli.quiet),
         Command::Fit(a) => fit::run(a, cli.quiet),
+        Command::Coatings(a) => coatings::run(a, cli.quiet),
         Command::Precompute(a) => precompute::run(a, cli.quiet),
         Command::Convert(a) => convert::run(a, cli.quiet),
         Command::Plugins(a) => plugins::run(a, cli.quiet),
