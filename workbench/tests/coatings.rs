@@ -85,3 +85,29 @@ fn the_budget_of_premium_surfaces_holds() {
     let bad = flarebench(&["coatings", "heliar-tronnier", "-o", "x", "--size", "3x3"]);
     assert!(String::from_utf8_lossy(&bad.stderr).contains("--size wants WxH"));
 }
+
+/// The Nikon zoom (short end): the choice cuts its ghost energy over its three angles against
+/// MgF₂ everywhere, as the renderer draws both, and the estimate agrees with the renders.
+#[test]
+#[ignore = "slow tier: 142 ghosts' band images at three angles, some 3 min; by default the Heliar"]
+fn the_choice_cuts_the_nikon_zooms_flare() {
+    let dir = temp_dir("coatings-nikon");
+    let r = json(&[
+        "coatings",
+        "nikon-zoom-short",
+        "--size",
+        "160x107",
+        "-o",
+        dir.path().to_str().unwrap(),
+        "--json",
+    ]);
+    let (model, rendered) = (
+        r["factor"].as_f64().unwrap(),
+        r["rendered_factor"].as_f64().unwrap(),
+    );
+    assert!(model > 2.0 && rendered > 2.0, "{model} {rendered}");
+    assert!(
+        (model / rendered - 1.0).abs() < 0.05,
+        "{model} vs {rendered}"
+    );
+}

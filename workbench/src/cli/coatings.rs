@@ -263,9 +263,9 @@ fn print_report(r: &Report<'_>) {
         c.choice_ms,
         c.basis_ms
     );
-    println!("\n{:<8} {:<10}", "surface", "design");
+    println!("\n{:<8} design", "surface");
     for (s, d) in &c.after.designs {
-        println!("{:<8} {:<10}", s, d.name());
+        println!("{:<8} {}", s, d.name());
     }
     println!("\n{:<8} {:>12} {:>12}", "ghost", "before", "after");
     let mut rows: Vec<(&str, f64, f64)> = c
