@@ -954,3 +954,29 @@ fn o_does_not_open_a_lens_the_editor_owns() {
             .contains("the editor owns the lens")
     );
 }
+
+/// `C` swaps the lens shown with the one given to compare (A/B), keeping the scene; without
+/// one it says how to give one.
+#[test]
+fn c_swaps_the_compared_lenses() {
+    let mut viewer = Viewer::new(lens("heliar-tronnier"), options(), Box::new(|| {}))
+        .with_compare(lens("cooke-triplet-25mm"));
+    let mut target = Offscreen::new(WINDOW.0, WINDOW.1).unwrap();
+    settled(&mut viewer, &mut target);
+    let scene_before = viewer.scene().clone();
+    target.pass(&mut viewer, key(egui::Key::C));
+    assert!(viewer.showing_compared());
+    assert_eq!(viewer.system().name, lens("cooke-triplet-25mm").name);
+    assert!(viewer.message().unwrap().starts_with("B: "));
+    settled(&mut viewer, &mut target);
+    assert!(viewer.frame_shown().unwrap().stats.ghosts_drawn > 0);
+    assert_eq!(viewer.scene().lights, scene_before.lights);
+    target.pass(&mut viewer, key(egui::Key::C));
+    assert!(!viewer.showing_compared());
+    assert_eq!(viewer.system().name, "heliar-tronnier");
+
+    let mut alone = Viewer::new(lens("heliar-tronnier"), options(), Box::new(|| {}));
+    target.pass(&mut alone, key(egui::Key::C));
+    assert!(alone.message().unwrap().contains("--compare"));
+    assert_eq!(alone.system().name, "heliar-tronnier");
+}

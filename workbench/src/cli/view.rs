@@ -53,6 +53,11 @@ pub struct ViewArgs {
     /// The window's size (logical pixels), WxH; with --screenshot, the offscreen image's.
     #[arg(long, value_parser = parse_size, default_value = "1500x820")]
     pub window_size: (usize, usize),
+    /// A second lens to compare with (file or bundled name): `C` in the window swaps the
+    /// two (A/B), with the same lights, aperture and exposure — a lens from `flarebench fit`
+    /// or `flarebench coatings` against the original, say.
+    #[arg(long)]
+    pub compare: Option<String>,
     #[command(flatten)]
     pub algos: AlgoArgs,
 }
@@ -124,10 +129,18 @@ impl ViewArgs {
 
 pub fn run(args: &ViewArgs, quiet: bool) -> anyhow::Result<()> {
     let loaded = lens_library::load(&args.lens, quiet)?;
+    let compared = args
+        .compare
+        .as_deref()
+        .map(|c| lens_library::load(c, quiet))
+        .transpose()?;
     let options = args.options()?;
     let algos = args.algos.resolve()?;
     if let Some(path) = &args.screenshot {
         let mut viewer = Viewer::new(loaded.system, options, Box::new(|| {})).with_algos(algos)?;
+        if let Some(c) = compared {
+            viewer = viewer.with_compare(c.system);
+        }
         let (w, h) = args.window_size;
         let mut target = Offscreen::new(w as u32, h as u32)?;
         let settled = target.settle(&mut viewer, Duration::from_secs(600));
@@ -152,6 +165,9 @@ pub fn run(args: &ViewArgs, quiet: bool) -> anyhow::Result<()> {
         window::waker(event_loop.create_proxy()),
     )
     .with_algos(algos)?;
+    if let Some(c) = compared {
+        viewer = viewer.with_compare(c.system);
+    }
     if args.log {
         viewer = viewer.with_log(Box::new(|line| {
             use std::io::Write;

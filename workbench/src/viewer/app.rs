@@ -117,6 +117,10 @@ pub struct Viewer {
     waker: SharedWaker,
     /// The bundled library to open another lens from (`O`; not while an editor owns the lens).
     picker: LensPicker,
+    /// The other lens of an A/B comparison (`--compare`; `C` swaps it with the one shown),
+    /// and whether the one shown is the compared one (B).
+    compare: Option<Arc<LensSystem>>,
+    showing_b: bool,
 }
 
 /// What the debug views say for a plugin's frame.
@@ -188,9 +192,24 @@ impl Viewer {
             plugin_watch: None,
             waker,
             picker: LensPicker::default(),
+            compare: None,
+            showing_b: false,
         };
         v.rebuild_lens();
         v
+    }
+
+    /// Gives the viewer a second lens to compare the first with (A/B): `C` shows one, then
+    /// the other, with the same lights, aperture and exposure (a fitted or re-coated lens
+    /// against the original, say).
+    pub fn with_compare(mut self, other: LensSystem) -> Viewer {
+        self.compare = Some(Arc::new(other));
+        self
+    }
+
+    /// Whether the lens shown is the compared one (B of an A/B comparison).
+    pub fn showing_compared(&self) -> bool {
+        self.showing_b
     }
 
     /// Gives the viewer ghost plugins (resolved `--algo` arguments, each loaded with its
@@ -605,6 +624,9 @@ impl Viewer {
         }
         egui::Panel::top("viewer-help").show(ui, |ui| {
             ui.horizontal_wrapped(|ui| {
+                if self.compare.is_some() {
+                    ui.strong(if self.showing_b { "B" } else { "A" });
+                }
                 ui.strong(&self.system.name);
                 ui.label(status::help_line());
             });
@@ -687,8 +709,13 @@ impl Viewer {
         } else {
             format!("R {:.3} mm", 1.0 / s.curvature)
         };
+        let coating = if s.kind == flarebench_sdk::system::SurfaceKind::Refracting {
+            format!(", {}", status::coating_text(&s.coating))
+        } else {
+            String::new()
+        };
         Some(format!(
-            "row {row}: {radius}, thickness {:.3} mm, semi-diameter {:.3} mm",
+            "row {row}: {radius}, thickness {:.3} mm, semi-diameter {:.3} mm{coating}",
             s.thickness, s.semi_diameter
         ))
     }
@@ -741,6 +768,27 @@ impl Viewer {
         }
     }
 
+    /// Shows the other lens of the A/B comparison (`C`), keeping the view's camera.
+    fn swap_compared(&mut self) {
+        if self.link.is_some() {
+            self.message = Some(
+                "C compares lenses in `flarebench view`; here the editor owns the lens".into(),
+            );
+            return;
+        }
+        let Some(other) = self.compare.take() else {
+            self.message =
+                Some("C compares with another lens: give one with --compare LENS".into());
+            return;
+        };
+        self.compare = Some(Arc::clone(&self.system));
+        self.showing_b = !self.showing_b;
+        let side = if self.showing_b { "B" } else { "A" };
+        self.message = Some(format!("{side}: {} (C swaps)", other.name));
+        self.log(format!("compare {side} {}", other.name));
+        self.set_system(other, 0);
+    }
+
     fn keys(&mut self, ctx: &egui::Context) {
         // Keys typed into a text box (the lens picker's) are not shortcuts.
         if ctx.egui_wants_keyboard_input() || self.picker.is_open() {
@@ -757,6 +805,9 @@ impl Viewer {
                 self.picker.toggle();
                 return;
             }
+        }
+        if pressed(Key::C) {
+            self.swap_compared();
         }
         if pressed(Key::S) {
             self.scene.starburst = match self.scene.starburst {

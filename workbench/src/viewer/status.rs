@@ -16,7 +16,8 @@ pub fn help_line() -> &'static str {
     "lens: drag pan · wheel zoom · F fit · W wavelengths | flare: drag light · wheel exposure · \
      click ghost · N / Shift-N next/previous ghost · G ghost alone · S starburst on/off/only · \
      Q quality · B blades · L labels · D debug view (grid/stop/radius/irradiance) · E error · \
-     A renderer (built-in / --algo plugins) · O open a bundled lens · P save PNG · X save EXR"
+     A renderer (built-in / --algo plugins) · O open a bundled lens · C A/B (--compare) · \
+     P save PNG · X save EXR"
 }
 
 /// The error part of a frame's line.
@@ -213,5 +214,27 @@ pub fn show(ui: &mut Ui, v: StatusState<'_>) {
     }
     if let Some(d) = v.hovered {
         ui.label(d);
+    }
+}
+
+/// A surface's coating in words: `uncoated`, a quarter-wave layer, or a stack's layers as
+/// index/thickness (nm) from the object side.
+pub fn coating_text(coating: &flarebench_sdk::Coating) -> String {
+    use flarebench_sdk::Coating;
+    match coating {
+        Coating::None => "uncoated".to_string(),
+        Coating::SingleLayer {
+            design_wavelength_nm,
+            index,
+        } => format!("coated λ/4 n={index:.3} at {design_wavelength_nm:.0} nm"),
+        Coating::Stack(layers) => format!(
+            "coated {} layers {}",
+            layers.len(),
+            layers
+                .iter()
+                .map(|l| format!("{:.2}/{:.0}", l.index, l.thickness_nm))
+                .collect::<Vec<_>>()
+                .join(" ")
+        ),
     }
 }
