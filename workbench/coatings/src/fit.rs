@@ -32,7 +32,7 @@ use crate::CoatingError;
 use crate::basis::Basis;
 use crate::model::{CoatingModel, Family, ghost_energies};
 use crate::reweight::Reweighter;
-use crate::solve::{Bound, jacobian_at, minimise};
+use crate::solve::{Bound, Minimum, jacobian_at, minimise};
 
 /// Singular values of the scaled `JᵀJ` below this fraction of the largest mark directions the
 /// image does not constrain.
@@ -83,6 +83,8 @@ pub struct FitOptions {
     /// Starts spread over the bounds of the coatings' parameters, each solved from without
     /// the scan (besides `starts`).
     pub spread_starts: usize,
+    /// The first pass's distinct best solutions each refined by the later passes.
+    pub candidates: usize,
     /// Start from these parameters (coatings, then the gains when fitted) instead, without
     /// the scan.
     pub initial: Option<Vec<f64>>,
@@ -96,6 +98,7 @@ impl Default for FitOptions {
             passes: 3,
             starts: vec![(1.38, 450.0), (1.38, 550.0), (1.38, 650.0), (1.6, 550.0)],
             spread_starts: 8,
+            candidates: 3,
             initial: None,
         }
     }
@@ -396,6 +399,30 @@ impl Evaluator<'_> {
     }
 }
 
+/// Up to `k` of `found` (best first) that differ: each more than 2% of some parameter's range
+/// (or value) from every one kept before it.
+fn distinct(found: &[Minimum], bounds: &[Bound], k: usize) -> Vec<Minimum> {
+    let mut kept: Vec<Minimum> = Vec::new();
+    for m in found {
+        let differs = |o: &Minimum| {
+            m.params.iter().zip(&o.params).zip(bounds).any(|((a, b), bd)| {
+                let scale = match bd {
+                    Bound::Range(lo, hi) => hi - lo,
+                    Bound::Positive => a.abs().max(b.abs()).max(1e-12),
+                };
+                (a - b).abs() > 0.02 * scale
+            })
+        };
+        if kept.iter().all(differs) {
+            kept.push(m.clone());
+            if kept.len() == k {
+                break;
+            }
+        }
+    }
+    kept
+}
+
 /// Starts spread over the bounds' box of the coatings' parameters (an additive recurrence with
 /// the square roots of primes: the same each run), each with its best gains.
 fn spread_starts(
@@ -448,13 +475,17 @@ pub fn fit(
     if options.fit_gains {
         bounds.extend([Bound::Positive; 3]);
     }
-    let mut best: Option<Vec<f64>> = options.initial.clone();
-    let scan = best.is_none();
-    let (mut evaluations, mut fit_ms, mut basis_ms, mut converged) = (0, 0.0, 0.0, true);
-    let mut last = None;
-    for pass in 0..options.passes.max(1) {
+    let scan = options.initial.is_none();
+    let (mut evaluations, mut fit_ms, mut basis_ms) = (0, 0.0, 0.0);
+    // One pass: the basis rendered with `at`'s coatings (the lens's own without), then the
+    // solver from `starts` (the structured ones scanned first), then rescans from the best.
+    // Returns every solution found, best first, with the pass's basis.
+    let mut pass = |at: Option<&Vec<f64>>,
+                    starts_of: &dyn Fn(&Evaluator<'_>) -> Vec<Vec<f64>>,
+                    scan_first: usize|
+     -> Result<(Basis, Reweighter, Reduced, Vec<Minimum>), CoatingError> {
         let t0 = std::time::Instant::now();
-        let system = match &best {
+        let system = match at {
             Some(p) => model.apply(&p[..model.len()]),
             None => model.system().clone(),
         };
@@ -468,62 +499,85 @@ pub fn fit(
             basis: &basis,
             fit_gains: options.fit_gains,
         };
-        let starts: Vec<Vec<f64>> = match (&best, pass) {
-            (Some(p), _) => vec![p.clone()],
-            (None, _) => {
-                let mut starts: Vec<Vec<f64>> = Vec::new();
-                for &(n, q) in &options.starts {
-                    let mut p = model.start(n, q);
-                    if options.fit_gains {
-                        p.extend(ev.best_gains(&p));
-                    }
-                    // Without single layers every start is the designs' nominal one.
-                    if !starts.contains(&p) {
-                        starts.push(p);
-                    }
-                }
-                starts.extend(spread_starts(model, &bounds, &ev, options));
-                starts
-            }
-        };
         let f = |p: &[f64]| ev.residuals(p);
-        let structured = options.starts.len();
-        let tried: Vec<_> = starts
+        let mut tried: Vec<Minimum> = starts_of(&ev)
             .into_par_iter()
             .enumerate()
             .map(|(i, s)| {
-                let s = if scan && pass == 0 && i < structured {
-                    ev.scan(s, &bounds)
-                } else {
-                    s
-                };
+                let s = if i < scan_first { ev.scan(s, &bounds) } else { s };
                 minimise(&f, &s, &bounds)
             })
             .collect();
         evaluations += tried.iter().map(|m| m.evaluations).sum::<usize>();
-        let mut found = tried
-            .into_iter()
-            .min_by(|a, b| a.cost.total_cmp(&b.cost))
-            .ok_or(CoatingError::NoStart)?;
-        // Scan from the solution and solve again while that lowers the cost: the solver
-        // stops in a valley of the joint problem that a surface's scan can leave.
+        tried.sort_by(|a, b| a.cost.total_cmp(&b.cost));
+        if tried.is_empty() {
+            return Err(CoatingError::NoStart);
+        }
+        // Scan from the best and solve again while that lowers the cost: the solver stops in
+        // a valley of the joint problem that a surface's scan can leave.
         if scan {
             for _ in 0..MAX_RESCANS {
-                let again = minimise(&f, &ev.scan(found.params.clone(), &bounds), &bounds);
-                let better = again.cost < found.cost * (1.0 - 1e-6);
+                let again = minimise(&f, &ev.scan(tried[0].params.clone(), &bounds), &bounds);
                 evaluations += again.evaluations;
-                if !better {
+                if again.cost >= tried[0].cost * (1.0 - 1e-6) {
                     break;
                 }
-                found = again;
+                tried.insert(0, again);
             }
         }
-        converged = found.converged;
         fit_ms += t1.elapsed().as_secs_f64() * 1e3;
-        best = Some(found.params.clone());
         let Evaluator { bins, reduced, .. } = ev;
-        last = Some((basis, bins, reduced, found));
+        Ok((basis, bins, reduced, tried))
+    };
+    // The first pass from every start; its distinct best solutions are each refined by the
+    // remaining passes (the basis rendered anew at each), and the best refined one is kept:
+    // each is judged under a basis rendered with its own coatings, so a minimum that only
+    // the first basis's error made look best loses to one that is.
+    let first_starts = |ev: &Evaluator<'_>| -> Vec<Vec<f64>> {
+        if let Some(p) = &options.initial {
+            return vec![p.clone()];
+        }
+        let mut starts: Vec<Vec<f64>> = Vec::new();
+        for &(n, q) in &options.starts {
+            let mut p = model.start(n, q);
+            if options.fit_gains {
+                p.extend(ev.best_gains(&p));
+            }
+            // Without single layers every start is the designs' nominal one.
+            if !starts.contains(&p) {
+                starts.push(p);
+            }
+        }
+        starts.extend(spread_starts(model, &bounds, ev, options));
+        starts
+    };
+    let structured = if scan { options.starts.len() } else { 0 };
+    let (basis0, bins0, reduced0, found0) =
+        pass(options.initial.as_ref(), &first_starts, structured)?;
+    let candidates = distinct(&found0, &bounds, options.candidates.max(1));
+    let mut last: Option<(Basis, Reweighter, Reduced, Minimum)> = None;
+    if options.passes <= 1 {
+        last = Some((basis0, bins0, reduced0, found0[0].clone()));
+    } else {
+        drop((basis0, bins0, reduced0));
+        for c in candidates {
+            let mut current = c;
+            let mut refined = None;
+            for _ in 1..options.passes {
+                let start = current.params.clone();
+                let (basis, bins, reduced, found) =
+                    pass(Some(&start), &|_| vec![start.clone()], 0)?;
+                current = found[0].clone();
+                refined = Some((basis, bins, reduced, current.clone()));
+            }
+            if let Some(r) = refined
+                && last.as_ref().is_none_or(|l| r.3.cost < l.3.cost)
+            {
+                last = Some(r);
+            }
+        }
     }
+    let converged = last.as_ref().is_some_and(|l| l.3.converged);
     let (basis, bins, reduced, found) = last.expect("at least one pass");
     let p = found.params;
     let ev = Evaluator {

@@ -200,6 +200,18 @@ fn heliar_single_layers_are_recovered() {
     recover("heliar-tronnier", Family::Single, 1);
 }
 
+#[test]
+#[ignore = "probe"]
+fn probe_cooke() {
+    recover("cooke-triplet-25mm", Family::Single, 2);
+}
+
+#[test]
+#[ignore = "probe"]
+fn probe_double_gauss() {
+    recover("double-gauss-50mm", Family::Single, 3);
+}
+
 /// The basis re-weighted follows the renderer: for the coatings it was rendered with within
 /// 1–2% (the renderer applies a ray's angle factor at its band's centre to the whole band, the
 /// basis its reflectances' at every 5 nm), and for other coatings within what the angle split
