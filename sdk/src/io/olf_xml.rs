@@ -10,6 +10,7 @@ mod coating;
 mod fields;
 mod medium;
 mod read;
+mod sensor_stack;
 mod spans;
 mod write;
 
@@ -41,6 +42,7 @@ mod tags {
         "elements",
         "notes",
         "source",
+        "sensorStack",
     ];
     pub const ELEMENT_TAGS: &[&str] = &[
         "type",
@@ -60,6 +62,21 @@ mod tags {
         "maskFT",
     ];
     pub const LAYER_TAGS: &[&str] = &["index", "thicknessNm"];
+    pub const PLATE: &str = "plate";
+    pub const SENSOR_REFLECTANCE: &str = "sensorReflectance";
+    pub const POINT: &str = "point";
+    pub const PLATE_TAGS: &[&str] = &[
+        "thickness",
+        "gap",
+        "height",
+        "refractiveIndex",
+        "abbeNumber",
+        "glass",
+        "front",
+        "back",
+    ];
+    pub const FACE_TAGS: &[&str] = &["coatingLambda", "coatingIor", "coatingStack"];
+    pub const POINT_TAGS: &[&str] = &["wavelength", "reflectance"];
 }
 
 /// Parses OpenLensFlare XML (or ours) and validates the system. `file_label` names the file
@@ -83,8 +100,18 @@ pub fn parse_olf_xml(text: &str, file_label: &str) -> Result<LoadedLens, LensFil
             return Err(e);
         }
     }
+    // The stack goes behind a lens that is valid by itself, so the lens's own errors are
+    // reported at its elements first.
+    let system = match parsed.sensor_stack {
+        None => parsed.system,
+        Some((stack, pos)) => parsed.system.with_sensor_stack(Some(stack)).map_err(|m| {
+            let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+            let (line, column) = LineIndex::new(text).line_col(pos);
+            LensFileError::at(file_label, line, column, "sensorStack", m)
+        })?,
+    };
     Ok(LoadedLens {
-        system: parsed.system,
+        system,
         warnings: parsed.warnings,
     })
 }

@@ -125,11 +125,20 @@ fn write(system: &LensSystem, flavor: Flavor) -> String {
             }
         }
     }
+    // The elements are the bare lens; the stack's plates are written as `<sensorStack>` (ours
+    // only: OpenLensFlare gets the lens without them).
+    let bare = system.without_sensor_stack();
     out.push_str("    <elements>\n");
-    for s in &system.surfaces {
+    for s in &bare.surfaces {
         write_element(&mut out, s, flavor);
     }
-    out.push_str("    </elements>\n</opticalSystem>\n");
+    out.push_str("    </elements>\n");
+    if flavor == Flavor::Flarebench
+        && let Some(stack) = &system.sensor_stack
+    {
+        super::sensor_stack::write_sensor_stack(&mut out, stack, index_and_abbe, num, escape);
+    }
+    out.push_str("</opticalSystem>\n");
     out
 }
 
