@@ -51,7 +51,8 @@ pub const IR_CUT_MM: f64 = 1.5;
 pub const COVER_GLASS_MM: f64 = 0.5;
 /// Air from the IR-cut filter to the cover glass, and from the cover glass to the sensor (mm).
 pub const GAPS_MM: [f64; 2] = [0.5, 0.5];
-/// The plates' clear semi-diameter over the sensor's half diagonal.
+/// The plates' clear semi-diameter over the sensor's: the larger of its semi-diameter and the
+/// film's half diagonal.
 pub const PLATE_OVER_SENSOR: f64 = 1.1;
 /// The preset's sensor reflectance, (wavelength nm, reflectance).
 pub const SENSOR_REFLECTANCE: [(f64, f64); 5] = [
@@ -68,7 +69,8 @@ pub const SENSOR_REFLECTANCE: [(f64, f64); 5] = [
 /// (docs/physics.md §9).
 pub const BROADBAND_AR: [(f64, f64); 4] = [(1.38, 98.1), (2.05, 139.7), (1.38, 31.7), (2.05, 16.6)];
 
-/// The `digital` preset for `system`'s sensor (the plates' size follows the sensor's).
+/// The `digital` preset for `system`'s sensor (the plates' size follows the sensor's and the
+/// film's).
 pub fn digital(system: &LensSystem) -> SensorStack {
     let glass = GlassCatalog::bundled()
         .find("SCHOTT:N-BK7")
@@ -77,14 +79,13 @@ pub fn digital(system: &LensSystem) -> SensorStack {
         name: glass.canonical_name(),
         dispersion: glass.dispersion.clone(),
     };
+    // The plates cover the film's corners and the file's sensor, whichever reaches further.
     let sensor = system
         .surfaces
         .last()
-        .filter(|s| s.kind == SurfaceKind::Sensor && s.semi_diameter > 0.0)
-        .map_or(
-            0.5 * system.film_width_mm.hypot(system.film_height_mm),
-            |s| s.semi_diameter,
-        );
+        .filter(|s| s.kind == SurfaceKind::Sensor)
+        .map_or(0.0, |s| s.semi_diameter)
+        .max(0.5 * system.film_width_mm.hypot(system.film_height_mm));
     // The front face meets air first: the outer (low-index) layer first. The back face is
     // met from the glass: the same design mirrored, listed from the lens side (glass) on.
     let front: Vec<CoatingLayer> = BROADBAND_AR

@@ -38,6 +38,11 @@ fn the_digital_preset_is_an_ir_cut_filter_a_cover_glass_and_a_sensor_of_a_few_pe
     assert_eq!(s.plates[0].thickness, 1.5);
     assert_eq!(s.plates[1].thickness, 0.5);
     assert_eq!(s.plates[0].medium.label(), "SCHOTT:N-BK7");
+    // The plates cover the frame's corners (the Heliar's file gives its sensor 18 mm, less
+    // than the 36 × 24 mm film's half diagonal).
+    let corner = 0.5 * bare.film_width_mm.hypot(bare.film_height_mm);
+    assert!(bare.surfaces.last().unwrap().semi_diameter < corner);
+    assert!(s.plates.iter().all(|p| p.semi_diameter >= corner));
     for nm in [400.0, 500.0, 550.0, 600.0, 700.0] {
         let r = s.sensor_reflectance.at(nm);
         assert!((0.04..=0.07).contains(&r), "{nm} nm: {r}");

@@ -484,6 +484,7 @@ impl Sequence<f64> {
         let n = system.indices(lambda_nm);
         let z = system.vertex_z();
         let stop_semi = crate::paraxial::stop_opening(system);
+        let film_half_diagonal = 0.5 * system.film_width_mm.hypot(system.film_height_mm);
         let mut forward = start_forward;
         let steps = path
             .iter()
@@ -497,6 +498,9 @@ impl Sequence<f64> {
                 };
                 let semi = match surf.kind {
                     SurfaceKind::ApertureStop => stop_semi,
+                    // The sensor clips only where it reflects (a sensor stack): over the film,
+                    // whose corners may lie beyond a file's sensor semi-diameter.
+                    SurfaceKind::Sensor => surf.semi_diameter.max(film_half_diagonal),
                     _ => surf.semi_diameter,
                 };
                 let inv_semi2 = if interaction == Interaction::Sensor || semi <= 0.0 {
