@@ -4,7 +4,8 @@
 //! semi-diameter, `radius` 0 is flat, `refractiveIndex`/`abbeNumber` describe the medium after
 //! the surface (n = 1 is air), `coatingLambda`/`coatingIor` of 0 mean no coating. Our files add
 //! optional tags (`curvature`, `conic`, `aspheric`, `glass`, `coatingStack`, `notes`,
-//! `source`, and the catalogue's `maker`, `kind`, `nominalFocalLength`); see [`write_xml`].
+//! `source`, the catalogue's `maker`, `kind`, `nominalFocalLength`, and `sensorStack`, read and
+//! written by `sensor_stack`); see [`write_xml`].
 
 mod coating;
 mod fields;

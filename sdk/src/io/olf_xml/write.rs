@@ -22,7 +22,8 @@ enum Flavor {
 
 /// Writes the system as flarebench XML: every OpenLensFlare tag, plus `<curvature>` (exact),
 /// `<conic>`, `<aspheric>`, `<glass>`, `<coatingStack>`, `<source>`, `<notes>`, `<maker>`,
-/// `<kind>` and `<nominalFocalLength>` where they carry information. Reading the result gives back an equal [`LensSystem`] (strings are
+/// `<kind>`, `<nominalFocalLength>` and `<sensorStack>` where they carry information (the
+/// elements are the lens without its sensor stack). Reading the result gives back an equal [`LensSystem`] (strings are
 /// trimmed). The format is described in `docs/formats.md`.
 pub fn write_xml(system: &LensSystem) -> String {
     write(system, Flavor::Flarebench)
@@ -30,8 +31,9 @@ pub fn write_xml(system: &LensSystem) -> String {
 
 /// Writes the system with OpenLensFlare's tags only, for OpenLensFlare's LensPlanner, which
 /// refuses files with tags it does not know. Lossy: conic and aspheric terms, catalogue glass
-/// names (their nd/Vd are kept), coating stacks beyond the first layer, maker, kind and focal
-/// range are dropped, and the source and notes go into a comment.
+/// names (their nd/Vd are kept), coating stacks beyond the first layer, maker, kind, focal
+/// range and the sensor stack (the elements are the bare lens) are dropped, and the source
+/// and notes go into a comment.
 pub fn write_olf_xml(system: &LensSystem) -> String {
     write(system, Flavor::OpenLensFlare)
 }
