@@ -1,6 +1,7 @@
 //! flarebench-sdk: the optics core shared by every flare algorithm and the workbench.
 //!
-//! - [`system`]: the lens prescription model ([`LensSystem`], [`Surface`]) and its validation.
+//! - [`system`]: the lens prescription model ([`LensSystem`], [`Surface`]) and its validation,
+//!   with the optional sensor stack (plates in front of the sensor, its spectral reflectance).
 //! - [`glass`]: dispersion — the exact two-term Cauchy fit from nd/Vd and the refractiveindex.info
 //!   catalogue formulas for 1613 named glasses.
 //! - [`io`]: reading and writing lens files (OpenLensFlare XML and our superset of it, Zemax

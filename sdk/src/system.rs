@@ -5,6 +5,9 @@ use crate::lens_kind::LensKind;
 use crate::spectrum::LAMBDA_D_NM;
 
 pub use crate::coating::{Coating, CoatingLayer};
+pub use sensor_stack::{Plate, SensorStack, SpectralReflectance};
+
+mod sensor_stack;
 
 /// What a surface does in the sequence.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -216,8 +219,13 @@ pub struct LensSystem {
     pub notes: String,
     /// Where the prescription comes from (file, repository, licence).
     pub source: String,
-    /// Surfaces, object side first; the last one is the sensor.
+    /// Surfaces, object side first; the last one is the sensor. With a sensor stack, its
+    /// plates' faces are the surfaces in front of the sensor.
     pub surfaces: Vec<Surface>,
+    /// The plates in front of the sensor and the sensor's reflectance, when the lens has them
+    /// (`sensor_stack.rs`); set with [`LensSystem::with_sensor_stack`], which also puts the
+    /// plates' faces into `surfaces`. `None`: the sensor does not reflect.
+    pub sensor_stack: Option<SensorStack>,
 }
 
 /// One thing wrong with a prescription; readers map it to file, line and column.
@@ -256,6 +264,7 @@ impl LensSystem {
             notes: String::new(),
             source: String::new(),
             surfaces,
+            sensor_stack: None,
         }
     }
 
@@ -446,6 +455,25 @@ impl LensSystem {
             }
             if let Err(m) = s.coating.validate() {
                 at("coating", m);
+            }
+        }
+        if let Some(stack) = &self.sensor_stack {
+            let mut stack_issue = |message: String| {
+                issues.push(ValidationIssue {
+                    surface: None,
+                    field: "sensorStack",
+                    message,
+                })
+            };
+            match self
+                .without_sensor_stack()
+                .with_sensor_stack(Some(stack.clone()))
+            {
+                Err(m) => stack_issue(m),
+                Ok(rebuilt) if rebuilt != *self => stack_issue(
+                    "the surfaces in front of the sensor do not match the sensor stack".into(),
+                ),
+                Ok(_) => {}
             }
         }
         if issues.is_empty() {

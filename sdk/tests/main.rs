@@ -19,6 +19,7 @@ mod olf_table;
 mod properties;
 mod raster;
 mod self_contained;
+mod sensor_stack;
 mod starburst;
 mod zemax_pbrt;
 

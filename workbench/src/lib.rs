@@ -25,6 +25,7 @@ pub mod plugin_template;
 pub mod precomputed;
 pub mod reference_file;
 pub mod report;
+pub mod sensor_stack;
 pub mod sources;
 pub mod stability;
 pub mod stats;

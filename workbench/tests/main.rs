@@ -30,6 +30,7 @@ mod plugin_loop;
 mod plugins;
 mod readme;
 mod render;
+mod sensor_stack;
 mod stability;
 mod starburst;
 mod sweep;

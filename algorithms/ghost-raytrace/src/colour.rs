@@ -20,7 +20,8 @@ use crate::GhostRenderError;
 const FINE_BANDS: usize = 80;
 
 /// Normal-incidence factors of every surface at one wavelength:
-/// `[T forward, R forward, T backward, R backward]` (1, 0, 1, 0 where nothing reflects).
+/// `[T forward, R forward, T backward, R backward]` (1, 0, 1, 0 where nothing reflects; the
+/// sensor of a sensor stack reflects its spectral reflectance forward).
 pub fn surface_factors(system: &LensSystem, lambda_nm: f64) -> Vec<[f64; 4]> {
     let n = system.indices(lambda_nm);
     system
@@ -28,6 +29,11 @@ pub fn surface_factors(system: &LensSystem, lambda_nm: f64) -> Vec<[f64; 4]> {
         .iter()
         .enumerate()
         .map(|(i, s)| {
+            if s.kind == SurfaceKind::Sensor
+                && let Some(r) = system.sensor_reflectance(lambda_nm)
+            {
+                return [1.0 - r, r, 1.0, 0.0];
+            }
             if s.kind != SurfaceKind::Refracting || n[i] == n[i + 1] {
                 return [1.0, 0.0, 1.0, 0.0];
             }

@@ -1110,8 +1110,7 @@ pub fn approximate(
         .iter()
         .filter(|s| s.interaction != Interaction::Sensor)
         .map(|s| {
-            let r =
-                seq.coatings[s.surface].reflectance(s.n_from, s.n_to, 1.0, lambda_nm, s.forward);
+            let r = seq.reflectance(s, 1.0);
             if s.interaction == Interaction::Reflect {
                 r
             } else {

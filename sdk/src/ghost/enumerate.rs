@@ -49,13 +49,19 @@ impl std::str::FromStr for ReflectionOrder {
 }
 
 /// Surfaces that can reflect: refracting surfaces with different indices on their two sides
-/// (at the d line). Dummy surfaces, the stop and the sensor do not reflect.
+/// (at the d line) — with a sensor stack, its plates' faces among them — and the sensor when
+/// it has a reflectance (a sensor stack; it is last, so it is only ever the first or third
+/// reflection of a path). Dummy surfaces and the stop do not reflect.
 pub fn reflecting_surfaces(system: &LensSystem) -> Vec<usize> {
     let n = system.indices(LAMBDA_D_NM);
     let sensor = system.sensor_index();
-    (0..sensor)
+    let mut out: Vec<usize> = (0..sensor)
         .filter(|&i| system.surfaces[i].kind == SurfaceKind::Refracting && n[i] != n[i + 1])
-        .collect()
+        .collect();
+    if system.sensor_stack.is_some() && !system.surfaces.is_empty() {
+        out.push(sensor);
+    }
+    out
 }
 
 /// All N(N−1)/2 two-reflection paths over the N reflecting surfaces, including paths whose

@@ -4,12 +4,14 @@
 //! semi-diameter, `radius` 0 is flat, `refractiveIndex`/`abbeNumber` describe the medium after
 //! the surface (n = 1 is air), `coatingLambda`/`coatingIor` of 0 mean no coating. Our files add
 //! optional tags (`curvature`, `conic`, `aspheric`, `glass`, `coatingStack`, `notes`,
-//! `source`, and the catalogue's `maker`, `kind`, `nominalFocalLength`); see [`write_xml`].
+//! `source`, the catalogue's `maker`, `kind`, `nominalFocalLength`, and `sensorStack`, read and
+//! written by `sensor_stack`); see [`write_xml`].
 
 mod coating;
 mod fields;
 mod medium;
 mod read;
+mod sensor_stack;
 mod spans;
 mod write;
 
@@ -41,6 +43,7 @@ mod tags {
         "elements",
         "notes",
         "source",
+        "sensorStack",
     ];
     pub const ELEMENT_TAGS: &[&str] = &[
         "type",
@@ -60,6 +63,21 @@ mod tags {
         "maskFT",
     ];
     pub const LAYER_TAGS: &[&str] = &["index", "thicknessNm"];
+    pub const PLATE: &str = "plate";
+    pub const SENSOR_REFLECTANCE: &str = "sensorReflectance";
+    pub const POINT: &str = "point";
+    pub const PLATE_TAGS: &[&str] = &[
+        "thickness",
+        "gap",
+        "height",
+        "refractiveIndex",
+        "abbeNumber",
+        "glass",
+        "front",
+        "back",
+    ];
+    pub const FACE_TAGS: &[&str] = &["coatingLambda", "coatingIor", "coatingStack"];
+    pub const POINT_TAGS: &[&str] = &["wavelength", "reflectance"];
 }
 
 /// Parses OpenLensFlare XML (or ours) and validates the system. `file_label` names the file
@@ -83,8 +101,18 @@ pub fn parse_olf_xml(text: &str, file_label: &str) -> Result<LoadedLens, LensFil
             return Err(e);
         }
     }
+    // The stack goes behind a lens that is valid by itself, so the lens's own errors are
+    // reported at its elements first.
+    let system = match parsed.sensor_stack {
+        None => parsed.system,
+        Some((stack, pos)) => parsed.system.with_sensor_stack(Some(stack)).map_err(|m| {
+            let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+            let (line, column) = LineIndex::new(text).line_col(pos);
+            LensFileError::at(file_label, line, column, "sensorStack", m)
+        })?,
+    };
     Ok(LoadedLens {
-        system: parsed.system,
+        system,
         warnings: parsed.warnings,
     })
 }

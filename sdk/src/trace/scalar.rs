@@ -119,16 +119,7 @@ impl Sequence<f64> {
                     surface: step.surface,
                 };
             }
-            let coating = &self.coatings[step.surface];
-            let r = || {
-                coating.reflectance(
-                    step.n_from,
-                    step.n_to,
-                    out.cos_i,
-                    self.lambda_nm,
-                    step.forward,
-                )
-            };
+            let r = || self.reflectance(step, out.cos_i);
             match step.interaction {
                 Interaction::Refract => throughput *= 1.0 - r(),
                 Interaction::Reflect => throughput *= r(),

@@ -145,10 +145,15 @@ impl InterfaceTableSet {
     /// The tables of `system` at `lambda_nm`.
     pub fn for_system(system: &LensSystem, lambda_nm: f64) -> Self {
         let seq = Sequence::forward(system, lambda_nm);
-        Self::new(&seq.coatings, &seq.steps, lambda_nm)
+        Self::new(&seq.coatings, &seq.steps, lambda_nm, seq.sensor_reflectance)
     }
 
-    fn new(coatings: &[Coating], steps: &[Step<f64>], lambda_nm: f64) -> Self {
+    fn new(
+        coatings: &[Coating],
+        steps: &[Step<f64>],
+        lambda_nm: f64,
+        sensor_reflectance: Option<f64>,
+    ) -> Self {
         let mut tables: Vec<Option<Box<[InterfaceTable<f64>; 4]>>> = vec![None; coatings.len()];
         for b in boundaries(coatings, steps) {
             // Transmittance and reflectance tables for one direction, from one evaluation
@@ -170,6 +175,11 @@ impl InterfaceTableSet {
             let (backward_t, backward_r) = tables_for(false);
             tables[b.surface] = Some(Box::new([forward_t, forward_r, backward_t, backward_r]));
         }
+        if let Some(r) = sensor_reflectance
+            && let Some(last) = tables.last_mut()
+        {
+            *last = Some(sensor_tables(r));
+        }
         InterfaceTableSet { lambda_nm, tables }
     }
 
@@ -189,9 +199,16 @@ impl InterfaceTableSet {
                 && bounds.iter().all(|bd| s.tables[bd.surface].is_some())
         };
         if !(fits(a) && fits(b)) {
-            return Self::new(&seq.coatings, &seq.steps, lambda_nm);
+            return Self::new(&seq.coatings, &seq.steps, lambda_nm, seq.sensor_reflectance);
         }
         let mut out = Self::interpolate(a, b, lambda_nm);
+        // The sensor's reflectance is a table in wavelength (its own points, not two of ours):
+        // exact, not interpolated.
+        if let Some(r) = seq.sensor_reflectance
+            && let Some(last) = out.tables.last_mut()
+        {
+            *last = Some(sensor_tables(r));
+        }
         for bd in &bounds {
             let (Some(ta), Some(tb), Some(to)) = (
                 &a.tables[bd.surface],
@@ -298,6 +315,15 @@ impl InterfaceTableSet {
     }
 }
 
+/// The sensor's tables when it reflects `r` at every angle (its spectral reflectance at the
+/// set's wavelength): only the forward reflection is ever read (the sensor ends every other
+/// path); the forward transmittance `1 − r` is what it absorbs.
+fn sensor_tables(r: f64) -> Box<[InterfaceTable<f64>; 4]> {
+    let t = InterfaceTable::in_cosine([1.0 - r; TABLE_LEN]);
+    let r = InterfaceTable::in_cosine([r; TABLE_LEN]);
+    Box::new([t.clone(), r.clone(), t, r])
+}
+
 /// Entries of two neighbouring tables that differ by more than this are evaluated exactly by
 /// [`InterfaceTableSet::between`] rather than interpolated.
 pub const BETWEEN_EXACT_ABOVE: f64 = 2e-3;
@@ -373,6 +399,9 @@ pub struct Sequence<T> {
     pub coatings: Vec<Coating>,
     /// Interface factor tables referenced by [`Step::table`] (empty unless built).
     pub tables: Vec<InterfaceTable<T>>,
+    /// The sensor's reflectance at `lambda_nm` when it reflects (a lens with a sensor stack,
+    /// [`LensSystem::sensor_reflectance`]); `None` otherwise.
+    pub sensor_reflectance: Option<f64>,
 }
 
 impl Sequence<f64> {
@@ -408,8 +437,12 @@ impl Sequence<f64> {
     ) -> Result<Self, PathError> {
         let sensor = system.sensor_index();
         let r = ghost.reflections();
-        for &s in r {
-            if s >= sensor || system.surfaces[s].kind != SurfaceKind::Refracting {
+        // The sensor reflects when it has a reflectance (a sensor stack), and only light
+        // arriving at it: the first or third reflection.
+        let sensor_reflects = system.sensor_reflectance(lambda_nm).is_some();
+        for (k, &s) in r.iter().enumerate() {
+            let at_sensor = s == sensor && sensor_reflects && k % 2 == 0;
+            if !at_sensor && (s >= sensor || system.surfaces[s].kind != SurfaceKind::Refracting) {
                 return Err(PathError::NotReflecting(s));
             }
         }
@@ -472,6 +505,7 @@ impl Sequence<f64> {
         let n = system.indices(lambda_nm);
         let z = system.vertex_z();
         let stop_semi = crate::paraxial::stop_opening(system);
+        let film_half_diagonal = 0.5 * system.film_width_mm.hypot(system.film_height_mm);
         let mut forward = start_forward;
         let steps = path
             .iter()
@@ -485,6 +519,9 @@ impl Sequence<f64> {
                 };
                 let semi = match surf.kind {
                     SurfaceKind::ApertureStop => stop_semi,
+                    // The sensor clips only where it reflects (a sensor stack): over the film,
+                    // whose corners may lie beyond a file's sensor semi-diameter.
+                    SurfaceKind::Sensor => surf.semi_diameter.max(film_half_diagonal),
                     _ => surf.semi_diameter,
                 };
                 let inv_semi2 = if interaction == Interaction::Sensor || semi <= 0.0 {
@@ -535,6 +572,7 @@ impl Sequence<f64> {
             lambda_nm,
             coatings,
             tables: Vec::new(),
+            sensor_reflectance: system.sensor_reflectance(lambda_nm),
         };
         // Batches record where a ray crosses the stop on its last pass (the aperture mask's UV);
         // every other pass clips at the stop's working radius (a circle), so the iris's shape
@@ -565,7 +603,12 @@ impl Sequence<f64> {
     /// Builds the Fresnel/coating factor table of every step that changes a ray's weight
     /// (a refraction or reflection at a real boundary), so batches track the throughput.
     pub fn with_interface_tables(self) -> Self {
-        let set = InterfaceTableSet::new(&self.coatings, &self.steps, self.lambda_nm);
+        let set = InterfaceTableSet::new(
+            &self.coatings,
+            &self.steps,
+            self.lambda_nm,
+            self.sensor_reflectance,
+        );
         self.with_tables_from(&set)
     }
 
@@ -617,6 +660,7 @@ impl Sequence<f64> {
                     k: U::of(t.k),
                 })
                 .collect(),
+            sensor_reflectance: self.sensor_reflectance,
         }
     }
 }
@@ -630,6 +674,22 @@ impl<T: Real> Sequence<T> {
     /// True when there are no steps.
     pub fn is_empty(&self) -> bool {
         self.steps.is_empty()
+    }
+
+    /// The exact reflectance at `step` for light arriving at incidence cosine `cos_i`: the
+    /// sensor's spectral reflectance where the sensor reflects (a sensor stack), else the
+    /// surface's coating (or bare Fresnel) between the step's two media.
+    pub fn reflectance(&self, step: &Step<T>, cos_i: f64) -> f64 {
+        match self.sensor_reflectance {
+            Some(r) if step.surface + 1 == self.coatings.len() => r,
+            _ => self.coatings[step.surface].reflectance(
+                step.n_from,
+                step.n_to,
+                cos_i,
+                self.lambda_nm,
+                step.forward,
+            ),
+        }
     }
 }
 

@@ -127,6 +127,10 @@ impl Basis {
         light: &LightSpec,
         opts: &PlanOptions<'_>,
     ) -> Result<Basis, CoatingError> {
+        // A sensor stack's sensor reflects with no angle table to split: not modelled here.
+        if system.sensor_stack.is_some() {
+            return Err(CoatingError::SensorStack(system.name.clone()));
+        }
         let plans = plan(system, std::slice::from_ref(light), &frame, opts)?;
         let Some(mut lp) = plans.into_iter().next() else {
             return Err(CoatingError::NoLight);

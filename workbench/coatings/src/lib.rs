@@ -38,4 +38,8 @@ pub enum CoatingError {
     NoStart,
     #[error("the ghosts' colours could not be computed")]
     Colours,
+    #[error(
+        "lens `{0}` has a sensor stack: fitting and choosing coatings model the lens's own surfaces only; remove it (`--sensor-stack none` on `convert`) first"
+    )]
+    SensorStack(String),
 }

@@ -89,6 +89,8 @@ pub struct ApplyArgs {
     /// Print what was found and added as one JSON object.
     #[arg(long)]
     pub json: bool,
+    #[command(flatten)]
+    pub sensor_stack: crate::sensor_stack::SensorStackArgs,
 }
 
 /// One detected light.
@@ -126,7 +128,8 @@ struct ApplyReport {
 
 pub fn run(args: &ApplyArgs, quiet: bool) -> anyhow::Result<()> {
     let loaded = lens_library::load(&args.lens, quiet || args.json)?;
-    let sys = &loaded.system;
+    let system = args.sensor_stack.apply(loaded.system.clone())?;
+    let sys = &system;
     let input = read_input_image(&args.image)?;
     let bg = &input.image;
     let gain = match args.gain {

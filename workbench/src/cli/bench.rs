@@ -88,6 +88,8 @@ pub struct BenchArgs {
     /// Print the results as JSON.
     #[arg(long)]
     pub json: bool,
+    #[command(flatten)]
+    pub sensor_stack: crate::sensor_stack::SensorStackArgs,
 }
 
 /// An aperture the bench times.
@@ -189,7 +191,9 @@ pub fn run(args: &BenchArgs, quiet: bool) -> anyhow::Result<()> {
 fn bench_lens(name: &str, args: &BenchArgs, quiet: bool) -> anyhow::Result<Vec<BenchRow>> {
     let lights = std::slice::from_ref(&args.light);
     let mut rows = Vec::new();
-    let sys = lens_library::load(name, quiet || args.json)?.system;
+    let sys = args
+        .sensor_stack
+        .apply(lens_library::load(name, quiet || args.json)?.system)?;
     let table = match &args.precomputed {
         Some(p) => Some(load_precomputed(p, &sys, quiet || args.json)?),
         None => None,

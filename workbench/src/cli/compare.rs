@@ -85,6 +85,8 @@ pub struct CompareArgs {
     /// With --watch: end after this many changes (reloads and failed reloads), for tests.
     #[arg(long, hide = true, requires = "watch")]
     pub watch_events: Option<u32>,
+    #[command(flatten)]
+    pub sensor_stack: crate::sensor_stack::SensorStackArgs,
 }
 
 /// One algorithm's results.
@@ -270,7 +272,7 @@ impl Setup {
     /// Loads the lens and renders (or reads) the reference.
     pub(crate) fn new(args: &CompareArgs, quiet: bool) -> anyhow::Result<Setup> {
         let loaded = lens_library::load(&args.lens, quiet || args.json)?;
-        let sys = loaded.system;
+        let sys = args.sensor_stack.apply(loaded.system)?;
         let (w, h) = args.size;
         let frame = Frame {
             width: w,

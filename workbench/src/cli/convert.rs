@@ -21,6 +21,8 @@ pub struct ConvertArgs {
     pub output: PathBuf,
     #[command(flatten)]
     pub read: ReadArgs,
+    #[command(flatten)]
+    pub sensor_stack: crate::sensor_stack::SensorStackArgs,
 }
 
 pub fn run(args: &ConvertArgs, quiet: bool) -> anyhow::Result<()> {
@@ -35,7 +37,8 @@ pub fn run(args: &ConvertArgs, quiet: bool) -> anyhow::Result<()> {
         );
     }
     let loaded = lens_library::load_with(&args.input, quiet, &args.read.options())?;
-    let sys = &loaded.system;
+    let system = args.sensor_stack.apply(loaded.system.clone())?;
+    let sys = &system;
     save_xml(sys, &args.output)
         .with_context(|| format!("could not write `{}`", args.output.display()))?;
     if !quiet {

@@ -65,6 +65,8 @@ pub struct CrosscheckArgs {
     /// `reference.exr` (unless `--no-reference`) and `renderer.exr`.
     #[arg(long, value_name = "DIR")]
     pub export: Option<std::path::PathBuf>,
+    #[command(flatten)]
+    pub sensor_stack: crate::sensor_stack::SensorStackArgs,
 }
 
 /// `--allot` (`ghost_raytrace::crosscheck::Allot`).
@@ -158,7 +160,9 @@ pub fn run(args: &CrosscheckArgs, quiet: bool) -> anyhow::Result<()> {
         args.outside_weight > 0.0 && args.outside_weight <= 1.0,
         "--outside-weight must be in (0, 1]"
     );
-    let sys = lens_library::load(&args.lens, quiet || args.json)?.system;
+    let sys = args
+        .sensor_stack
+        .apply(lens_library::load(&args.lens, quiet || args.json)?.system)?;
     let frame = frame_for(&sys, args.size);
     let opts = CrosscheckOptions {
         mc: McSettings {

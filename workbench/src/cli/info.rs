@@ -23,6 +23,8 @@ pub struct InfoArgs {
     /// Print one JSON object instead of tables.
     #[arg(long)]
     pub json: bool,
+    #[command(flatten)]
+    pub sensor_stack: crate::sensor_stack::SensorStackArgs,
 }
 
 /// One surface as shown in the table and in JSON.
@@ -102,7 +104,8 @@ pub fn run(args: &InfoArgs, quiet: bool) -> anyhow::Result<()> {
         quiet || args.json,
         &args.read.options(),
     )?;
-    let sys = &loaded.system;
+    let system = args.sensor_stack.apply(loaded.system.clone())?;
+    let sys = &system;
     let lambda = wavelength(args.wavelength_nm.unwrap_or(sys.default_wavelength_nm()))?;
     let p = analyse(sys, lambda)?;
     let surfaces = rows(sys, lambda);

@@ -51,6 +51,8 @@ pub struct PrecomputeArgs {
     /// Print a summary as JSON.
     #[arg(long)]
     pub json: bool,
+    #[command(flatten)]
+    pub sensor_stack: crate::sensor_stack::SensorStackArgs,
 }
 
 pub fn run(args: &PrecomputeArgs, quiet: bool) -> anyhow::Result<()> {
@@ -60,7 +62,8 @@ pub fn run(args: &PrecomputeArgs, quiet: bool) -> anyhow::Result<()> {
         args.step_deg
     );
     let loaded = lens_library::load(&args.lens, quiet || args.json)?;
-    let sys = &loaded.system;
+    let system = args.sensor_stack.apply(loaded.system.clone())?;
+    let sys = &system;
     let max = match args.max_angle_deg {
         Some(m) => m.min(89.0),
         None => default_max_angle_deg(sys)?,

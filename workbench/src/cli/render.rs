@@ -116,6 +116,8 @@ pub struct RenderArgs {
     /// Print the report as one JSON object.
     #[arg(long)]
     pub json: bool,
+    #[command(flatten)]
+    pub sensor_stack: crate::sensor_stack::SensorStackArgs,
 }
 
 /// Starburst options shared by `render` and `apply`.
@@ -284,7 +286,8 @@ fn ms(t: Instant) -> f64 {
 pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
     let t_load = Instant::now();
     let loaded = lens_library::load(&args.lens, quiet || args.json)?;
-    let sys = &loaded.system;
+    let system = args.sensor_stack.apply(loaded.system.clone())?;
+    let sys = &system;
     let background = match &args.background {
         Some(p) => Some(read_input_image(p)?.image),
         None => None,

@@ -31,6 +31,8 @@ pub struct TraceArgs {
     pub json: bool,
     #[command(flatten)]
     pub read: ReadArgs,
+    #[command(flatten)]
+    pub sensor_stack: crate::sensor_stack::SensorStackArgs,
 }
 
 #[derive(Debug, Serialize)]
@@ -101,7 +103,8 @@ pub fn run(args: &TraceArgs, quiet: bool) -> anyhow::Result<()> {
         "--azimuth-deg must be a finite number"
     );
     let loaded = lens_library::load_with(&args.lens, quiet || args.json, &args.read.options())?;
-    let sys = &loaded.system;
+    let system = args.sensor_stack.apply(loaded.system.clone())?;
+    let sys = &system;
     let lambda = wavelength(args.wavelength_nm.unwrap_or(sys.default_wavelength_nm()))?;
     let seq = Sequence::forward(sys, lambda);
     let ray = Ray::collimated(

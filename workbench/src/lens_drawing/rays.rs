@@ -308,6 +308,7 @@ fn one_step(
         lambda_nm: seq.lambda_nm,
         coatings: vec![flarebench_sdk::Coating::None; seq.coatings.len()],
         tables: Vec::new(),
+        sensor_reflectance: None,
     }
 }
 

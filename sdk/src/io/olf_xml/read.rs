@@ -3,12 +3,13 @@
 use super::coating::read_coating;
 use super::fields::{Ctx, Fields, number, text};
 use super::medium::read_medium;
+use super::sensor_stack::read_sensor_stack;
 use super::spans::{ElementSpans, SystemSpans};
 use super::tags;
 use crate::io::LensFileError;
 use crate::io::xml_tree::{self, Node};
 use crate::lens_kind::parse_kinds;
-use crate::system::{LensSystem, Surface, SurfaceKind, curvature_from_radius};
+use crate::system::{LensSystem, SensorStack, Surface, SurfaceKind, curvature_from_radius};
 
 /// Film size used when a file gives none (full-frame 35 mm).
 const DEFAULT_FILM_MM: (f64, f64) = (36.0, 24.0);
@@ -16,9 +17,13 @@ const DEFAULT_FILM_MM: (f64, f64) = (36.0, 24.0);
 /// A parsed but not yet validated system, with the positions of its fields.
 #[derive(Debug)]
 pub(super) struct Parsed {
+    /// The lens without its sensor stack.
     pub system: LensSystem,
     pub spans: SystemSpans,
     pub warnings: Vec<String>,
+    /// `<sensorStack>` as read, with the byte offset of its tag: put behind the lens once the
+    /// lens is valid.
+    pub sensor_stack: Option<(SensorStack, usize)>,
 }
 
 /// Parses the document without validating the resulting system.
@@ -29,19 +34,19 @@ pub(super) fn parse_document(text: &str, file: &str) -> Result<Parsed, LensFileE
         let field = e.element.unwrap_or_default();
         ctx.error(e.pos, &field, e.message)
     })?;
-    let (system, spans) = read_system(&mut ctx, &root, file)?;
+    let (system, spans, sensor_stack) = read_system(&mut ctx, &root, file)?;
     Ok(Parsed {
         system,
         spans,
         warnings: ctx.warnings,
+        sensor_stack,
     })
 }
 
-fn read_system(
-    ctx: &mut Ctx<'_>,
-    root: &Node,
-    file: &str,
-) -> Result<(LensSystem, SystemSpans), LensFileError> {
+/// What [`read_system`] reads: the bare lens, where its fields are, its sensor stack.
+type SystemRead = (LensSystem, SystemSpans, Option<(SensorStack, usize)>);
+
+fn read_system(ctx: &mut Ctx<'_>, root: &Node, file: &str) -> Result<SystemRead, LensFileError> {
     if root.name != tags::SYSTEM {
         return Err(ctx.error(
             root.pos,
@@ -131,6 +136,7 @@ fn read_system(
         notes: text(f.get("notes")).unwrap_or_default(),
         source: text(f.get("source")).unwrap_or_default(),
         surfaces,
+        sensor_stack: None,
     };
     let spans = SystemSpans {
         pos: root.pos,
@@ -138,7 +144,11 @@ fn read_system(
         elements_pos: Some(elements.pos),
         elements: element_spans,
     };
-    Ok((system, spans))
+    let sensor_stack = match f.get("sensorStack") {
+        Some(node) => Some((read_sensor_stack(ctx, node)?, node.pos)),
+        None => None,
+    };
+    Ok((system, spans, sensor_stack))
 }
 
 fn read_element(

@@ -683,6 +683,7 @@ fn system() -> impl Strategy<Value = LensSystem> {
                     notes,
                     source,
                     surfaces,
+                    sensor_stack: None,
                 }
             },
         )

@@ -22,7 +22,8 @@ enum Flavor {
 
 /// Writes the system as flarebench XML: every OpenLensFlare tag, plus `<curvature>` (exact),
 /// `<conic>`, `<aspheric>`, `<glass>`, `<coatingStack>`, `<source>`, `<notes>`, `<maker>`,
-/// `<kind>` and `<nominalFocalLength>` where they carry information. Reading the result gives back an equal [`LensSystem`] (strings are
+/// `<kind>`, `<nominalFocalLength>` and `<sensorStack>` where they carry information (the
+/// elements are the lens without its sensor stack). Reading the result gives back an equal [`LensSystem`] (strings are
 /// trimmed). The format is described in `docs/formats.md`.
 pub fn write_xml(system: &LensSystem) -> String {
     write(system, Flavor::Flarebench)
@@ -30,8 +31,9 @@ pub fn write_xml(system: &LensSystem) -> String {
 
 /// Writes the system with OpenLensFlare's tags only, for OpenLensFlare's LensPlanner, which
 /// refuses files with tags it does not know. Lossy: conic and aspheric terms, catalogue glass
-/// names (their nd/Vd are kept), coating stacks beyond the first layer, maker, kind and focal
-/// range are dropped, and the source and notes go into a comment.
+/// names (their nd/Vd are kept), coating stacks beyond the first layer, maker, kind, focal
+/// range and the sensor stack (the elements are the bare lens) are dropped, and the source
+/// and notes go into a comment.
 pub fn write_olf_xml(system: &LensSystem) -> String {
     write(system, Flavor::OpenLensFlare)
 }
@@ -125,11 +127,20 @@ fn write(system: &LensSystem, flavor: Flavor) -> String {
             }
         }
     }
+    // The elements are the bare lens; the stack's plates are written as `<sensorStack>` (ours
+    // only: OpenLensFlare gets the lens without them).
+    let bare = system.without_sensor_stack();
     out.push_str("    <elements>\n");
-    for s in &system.surfaces {
+    for s in &bare.surfaces {
         write_element(&mut out, s, flavor);
     }
-    out.push_str("    </elements>\n</opticalSystem>\n");
+    out.push_str("    </elements>\n");
+    if flavor == Flavor::Flarebench
+        && let Some(stack) = &system.sensor_stack
+    {
+        super::sensor_stack::write_sensor_stack(&mut out, stack, index_and_abbe, num, escape);
+    }
+    out.push_str("</opticalSystem>\n");
     out
 }
 
