@@ -405,13 +405,17 @@ fn distinct(found: &[Minimum], bounds: &[Bound], k: usize) -> Vec<Minimum> {
     let mut kept: Vec<Minimum> = Vec::new();
     for m in found {
         let differs = |o: &Minimum| {
-            m.params.iter().zip(&o.params).zip(bounds).any(|((a, b), bd)| {
-                let scale = match bd {
-                    Bound::Range(lo, hi) => hi - lo,
-                    Bound::Positive => a.abs().max(b.abs()).max(1e-12),
-                };
-                (a - b).abs() > 0.02 * scale
-            })
+            m.params
+                .iter()
+                .zip(&o.params)
+                .zip(bounds)
+                .any(|((a, b), bd)| {
+                    let scale = match bd {
+                        Bound::Range(lo, hi) => hi - lo,
+                        Bound::Positive => a.abs().max(b.abs()).max(1e-12),
+                    };
+                    (a - b).abs() > 0.02 * scale
+                })
         };
         if kept.iter().all(differs) {
             kept.push(m.clone());
@@ -504,7 +508,11 @@ pub fn fit(
             .into_par_iter()
             .enumerate()
             .map(|(i, s)| {
-                let s = if i < scan_first { ev.scan(s, &bounds) } else { s };
+                let s = if i < scan_first {
+                    ev.scan(s, &bounds)
+                } else {
+                    s
+                };
                 minimise(&f, &s, &bounds)
             })
             .collect();

@@ -30,6 +30,20 @@ impl Rng {
     }
 }
 
+/// Hidden coatings: each parameter uniform over the middle half of its range.
+fn hidden_params(model: &CoatingModel, rng: &mut Rng) -> Vec<f64> {
+    model
+        .bounds()
+        .iter()
+        .map(|b| match b {
+            flarebench_coatings::solve::Bound::Range(lo, hi) => {
+                lo + (hi - lo) * (0.25 + 0.5 * rng.next())
+            }
+            flarebench_coatings::solve::Bound::Positive => 1.0,
+        })
+        .collect()
+}
+
 /// The renderer's image of `system`'s ghosts under `light`, every ghost with light kept.
 fn truth(system: &LensSystem, frame: Frame, light: &LightSpec) -> HdrImage {
     let mut opts = PlanOptions::for_quality(Quality::Default, None);
@@ -44,17 +58,7 @@ fn recover(stem: &str, family: Family, seed: u64) {
     let lens = load_lens(stem);
     let mut rng = Rng(seed);
     let model = CoatingModel::new(&lens, |_| family).unwrap();
-    // Hidden coatings: each parameter uniform over the middle half of its range.
-    let hidden: Vec<f64> = model
-        .bounds()
-        .iter()
-        .map(|b| match b {
-            flarebench_coatings::solve::Bound::Range(lo, hi) => {
-                lo + (hi - lo) * (0.25 + 0.5 * rng.next())
-            }
-            flarebench_coatings::solve::Bound::Positive => 1.0,
-        })
-        .collect();
+    let hidden = hidden_params(&model, &mut rng);
     let hidden_lens = model.apply(&hidden);
     let frame = Frame::across_film(160, 107, lens.film_width_mm);
     let light = LightSpec::parse("12,30,40").unwrap();
@@ -235,16 +239,7 @@ fn reweighted_follows_the_renderer(stem: &str, own_limit: f64, limit: f64) {
         let lens = load_lens(stem);
         let model = CoatingModel::new(&lens, |_| Family::Single).unwrap();
         let mut rng = Rng(2);
-        let hidden: Vec<f64> = model
-            .bounds()
-            .iter()
-            .map(|b| match b {
-                flarebench_coatings::solve::Bound::Range(lo, hi) => {
-                    lo + (hi - lo) * (0.25 + 0.5 * rng.next())
-                }
-                flarebench_coatings::solve::Bound::Positive => 1.0,
-            })
-            .collect();
+        let hidden = hidden_params(&model, &mut rng);
         let b_lens = model.apply(&hidden);
         let frame = Frame::across_film(120, 80, lens.film_width_mm);
         let lights: &[&str] = if stem == "heliar-tronnier" {

@@ -174,14 +174,7 @@ pub fn run(args: &CoatingsArgs, quiet: bool) -> Result<()> {
         outputs,
     };
     let json_path = args.output.join("coatings.json");
-    std::fs::write(&json_path, serde_json::to_string_pretty(&report)?)
-        .with_context(|| format!("could not write `{}`", json_path.display()))?;
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
-    } else if !quiet {
-        print_report(&report);
-    }
-    Ok(())
+    super::keep_report(&report, &json_path, args.json, quiet, print_report)
 }
 
 fn parse_size(s: &str) -> Result<(usize, usize)> {

@@ -212,13 +212,13 @@ pub fn run(args: &FitArgs, quiet: bool) -> Result<()> {
 
     std::fs::create_dir_all(&args.output)
         .with_context(|| format!("could not create `{}`", args.output.display()))?;
-    let mut lens = found.system.clone();
-    lens.notes = format!(
-        "{}{}Coatings fitted by `flarebench fit` to {} (relative RMSE {:.4}).",
-        lens.notes,
-        if lens.notes.is_empty() { "" } else { "\n" },
-        args.image.display(),
-        found.relative_rmse
+    let lens = super::with_note(
+        found.system.clone(),
+        &format!(
+            "Coatings fitted by `flarebench fit` to {} (relative RMSE {:.4}).",
+            args.image.display(),
+            found.relative_rmse
+        ),
     );
     let lens_path = args.output.join("fitted.xml");
     save_xml(&lens, &lens_path)
@@ -258,14 +258,7 @@ pub fn run(args: &FitArgs, quiet: bool) -> Result<()> {
             .collect(),
     };
     let json_path = args.output.join("fit.json");
-    std::fs::write(&json_path, serde_json::to_string_pretty(&report)?)
-        .with_context(|| format!("could not write `{}`", json_path.display()))?;
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
-    } else if !quiet {
-        print_report(&report);
-    }
-    Ok(())
+    super::keep_report(&report, &json_path, args.json, quiet, print_report)
 }
 
 /// The light, where it came from, and its image's pixel (when known).

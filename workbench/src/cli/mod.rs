@@ -129,6 +129,35 @@ pub fn main() -> ExitCode {
 }
 
 /// Checks a wavelength argument (nm).
+/// Writes `report` as JSON to `path` (beside a command's other outputs), then prints it: as
+/// JSON with `--json`, else as text by `print` unless quiet.
+fn keep_report<T: serde::Serialize>(
+    report: &T,
+    path: &std::path::Path,
+    json: bool,
+    quiet: bool,
+    print: impl FnOnce(&T),
+) -> anyhow::Result<()> {
+    use anyhow::Context;
+    let text = serde_json::to_string_pretty(report)?;
+    std::fs::write(path, &text).with_context(|| format!("could not write `{}`", path.display()))?;
+    if json {
+        println!("{text}");
+    } else if !quiet {
+        print(report);
+    }
+    Ok(())
+}
+
+/// `lens` with `note` added to its notes, on a line of its own.
+fn with_note(mut lens: flarebench_sdk::LensSystem, note: &str) -> flarebench_sdk::LensSystem {
+    if !lens.notes.is_empty() {
+        lens.notes.push('\n');
+    }
+    lens.notes.push_str(note);
+    lens
+}
+
 fn wavelength(nm: f64) -> anyhow::Result<f64> {
     anyhow::ensure!(
         nm.is_finite() && (200.0..=2500.0).contains(&nm),
