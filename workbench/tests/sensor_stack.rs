@@ -148,13 +148,9 @@ fn render_bytes(lens: &str, extra: &[&str], dir: &std::path::Path, name: &str) -
     std::fs::read(&out).unwrap()
 }
 
-/// A file with the `digital` stack (written by `convert --sensor-stack digital`) renders
-/// bit for bit as the bare lens with `--sensor-stack digital`, and with `--sensor-stack none`
-/// bit for bit as the lens without a stack; the stack changes the image.
-#[test]
-fn a_stack_renders_the_same_from_the_file_or_the_option_and_none_restores_the_bare_image() {
-    let tmp = temp_dir("sensor-stack");
-    let file = tmp.path().join("heliar-digital.xml");
+/// The Heliar with the `digital` stack, written by `convert --sensor-stack digital` into `dir`.
+fn heliar_with_digital_stack(dir: &std::path::Path) -> std::path::PathBuf {
+    let file = dir.join("heliar-digital.xml");
     let run = flarebench(&[
         "convert",
         "heliar-tronnier",
@@ -168,6 +164,16 @@ fn a_stack_renders_the_same_from_the_file_or_the_option_and_none_restores_the_ba
         "{}",
         String::from_utf8_lossy(&run.stderr)
     );
+    file
+}
+
+/// A file with the `digital` stack (written by `convert --sensor-stack digital`) renders
+/// bit for bit as the bare lens with `--sensor-stack digital`, and with `--sensor-stack none`
+/// bit for bit as the lens without a stack; the stack changes the image.
+#[test]
+fn a_stack_renders_the_same_from_the_file_or_the_option_and_none_restores_the_bare_image() {
+    let tmp = temp_dir("sensor-stack");
+    let file = heliar_with_digital_stack(tmp.path());
     let text = std::fs::read_to_string(&file).unwrap();
     assert!(text.contains("<sensorStack>") && text.contains("SCHOTT:N-BK7"));
     let f = file.to_str().unwrap();
@@ -198,16 +204,7 @@ fn a_stack_renders_the_same_from_the_file_or_the_option_and_none_restores_the_ba
 #[test]
 fn a_bad_stack_in_a_file_is_an_error_naming_the_file_line_and_field() {
     let tmp = temp_dir("sensor-stack-bad");
-    let file = tmp.path().join("h.xml");
-    let run = flarebench(&[
-        "convert",
-        "heliar-tronnier",
-        "--sensor-stack",
-        "digital",
-        "-o",
-        file.to_str().unwrap(),
-    ]);
-    assert!(run.status.success());
+    let file = heliar_with_digital_stack(tmp.path());
     let text = std::fs::read_to_string(&file).unwrap();
     let bad = text.replacen("<gap>0.5</gap>", "<gap>-0.5</gap>", 1);
     std::fs::write(&file, &bad).unwrap();
@@ -216,7 +213,7 @@ fn a_bad_stack_in_a_file_is_an_error_naming_the_file_line_and_field() {
     assert_eq!(run.status.code(), Some(1));
     let err = String::from_utf8_lossy(&run.stderr);
     assert!(
-        err.contains(&format!("h.xml:{line}:")) && err.contains("field `gap`"),
+        err.contains(&format!("heliar-digital.xml:{line}:")) && err.contains("field `gap`"),
         "{err}"
     );
     assert!(err.contains("plate 1: must be ≥ 0 mm, got -0.5"), "{err}");
