@@ -12,10 +12,10 @@
 //! The solver is bounded Levenberg–Marquardt (`crate::solve`), from several starts, each first
 //! improved surface by surface over a grid of each surface's parameters (`Evaluator::scan`:
 //! a layer's reflectance is periodic in its thickness, and a local solver keeps to the valley
-//! it starts in). The basis
-//! is then rendered again with the fitted coatings and the fit repeated from its solution
-//! (`FitOptions::passes`), which removes the basis's one approximation (`crate::basis`) at the
-//! solution. Uncertainties come from the Jacobian there: `cov = s² (JᵀJ)⁺` with `s²` the
+//! it starts in). The first pass's best distinct solutions (`FitOptions::candidates`) are each
+//! refined: the basis rendered again with the solution's coatings and the fit repeated from it
+//! (`FitOptions::passes`), so each is judged under a basis of its own coatings, where the
+//! basis's approximations (`crate::basis`) matter least; the best refined one is kept. Uncertainties come from the Jacobian there: `cov = s² (JᵀJ)⁺` with `s²` the
 //! residual variance per pixel channel; directions `JᵀJ` does not see (singular values under
 //! [`NULL_RCOND`] of the largest, in parameters scaled by their ranges) are reported as not
 //! constrained, with the parameters they mix.
@@ -153,7 +153,8 @@ pub struct Fit {
     pub pixels_counted: usize,
     pub band_images: usize,
     pub evaluations: usize,
-    pub passes: usize,
+    /// Renders of the basis: the first pass's, then each candidate's refinements.
+    pub renders: usize,
     pub converged: bool,
     pub fit_ms: f64,
     pub basis_ms: f64,
@@ -480,7 +481,7 @@ pub fn fit(
         bounds.extend([Bound::Positive; 3]);
     }
     let scan = options.initial.is_none();
-    let (mut evaluations, mut fit_ms, mut basis_ms) = (0, 0.0, 0.0);
+    let (mut evaluations, mut fit_ms, mut basis_ms, mut renders) = (0, 0.0, 0.0, 0);
     // One pass: the basis rendered with `at`'s coatings (the lens's own without), then the
     // solver from `starts` (the structured ones scanned first), then rescans from the best.
     // Returns every solution found, best first, with the pass's basis.
@@ -495,6 +496,7 @@ pub fn fit(
         };
         let basis = Basis::render(&system, aperture, frame, light, options.quality)?;
         basis_ms += t0.elapsed().as_secs_f64() * 1e3;
+        renders += 1;
         let t1 = std::time::Instant::now();
         let ev = Evaluator {
             model,
@@ -609,7 +611,7 @@ pub fn fit(
         &bounds,
         target,
         evaluations,
-        options.passes.max(1),
+        renders,
         converged,
         (fit_ms, basis_ms, evaluations_per_s),
     )
@@ -622,7 +624,7 @@ fn summarise(
     bounds: &[Bound],
     target: &Target,
     evaluations: usize,
-    passes: usize,
+    renders: usize,
     converged: bool,
     (fit_ms, basis_ms, evaluations_per_s): (f64, f64, f64),
 ) -> Result<Fit, CoatingError> {
@@ -760,7 +762,7 @@ fn summarise(
         pixels_counted: counted.len(),
         band_images: ev.basis.band_count(),
         evaluations,
-        passes,
+        renders,
         converged,
         fit_ms,
         basis_ms,

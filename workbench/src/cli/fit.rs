@@ -84,8 +84,9 @@ pub struct FitArgs {
     /// The image is reduced to at most this many pixels across for the fit.
     #[arg(long, default_value_t = 240)]
     pub fit_width: usize,
-    /// Renders of the ghosts' band images: the first with the lens's coatings, each next
-    /// with the last fit's.
+    /// Renders of the ghosts' band images per solution: the first with the lens's coatings,
+    /// each next with the last fit's (the three best distinct solutions of the first are each
+    /// refined so).
     #[arg(long, default_value_t = 3)]
     pub passes: usize,
     /// Starts spread over the parameters' bounds, besides four MgF₂-like ones scanned surface
@@ -408,7 +409,7 @@ fn print_report(r: &FitReport<'_>) {
         f.fit_ms,
         f.evaluations_per_s,
         f.basis_ms,
-        f.passes,
+        f.renders,
         if f.converged { "" } else { " (not converged)" }
     );
     println!("\n{:<28} {:>12} {:>12}", "parameter", "value", "σ");
