@@ -293,3 +293,75 @@ fn bad_path_files_and_patterns_are_refused_with_where_and_what() {
     let e = run(&fine, tmp.path().join("seq.exr").to_str().unwrap());
     assert!(e.contains("no frame number") && e.contains("####"), "{e}");
 }
+
+#[test]
+fn a_precomputed_table_serves_every_frame() {
+    let tmp = temp_dir("sequence-table");
+    let table = tmp.path().join("bounds.json");
+    let out = flarebench(&[
+        "precompute",
+        "heliar-tronnier",
+        "-o",
+        table.to_str().unwrap(),
+        "--max-angle-deg",
+        "12",
+        "--quiet",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let table = table.to_str().unwrap();
+    let path = write(tmp.path(), "path.toml", RIGHTWARD);
+    let full = tmp.path().join("full");
+    let alone = tmp.path().join("alone");
+    for d in [&full, &alone] {
+        std::fs::create_dir_all(d).unwrap();
+    }
+    let v = sequence(
+        &full,
+        &path,
+        "1..5",
+        "seq.####.exr",
+        &["--precomputed", table],
+    );
+    for f in v["frames"].as_array().unwrap() {
+        assert!(f["ghosts_drawn"].as_u64().unwrap() > 0, "{f}");
+    }
+    sequence(
+        &alone,
+        &path,
+        "3",
+        "seq.####.exr",
+        &["--precomputed", table],
+    );
+    assert!(
+        std::fs::read(alone.join("seq.0003.exr")).unwrap()
+            == std::fs::read(full.join("seq.0003.exr")).unwrap(),
+        "frame 3 rendered alone differs from frame 3 of the full run"
+    );
+    // A light that leaves the table's angles is an error naming the frame.
+    let far = write(
+        tmp.path(),
+        "far.toml",
+        "[[light]]\nkey = [\n  { frame = 1, theta = 2, phi = 0 },\n  { frame = 2, theta = 20, phi = 0 },\n]\n",
+    );
+    let o = flarebench(&[
+        "render",
+        "heliar-tronnier",
+        "--frames",
+        "1..2",
+        "--light-path",
+        &far,
+        "--size",
+        "32x18",
+        "--precomputed",
+        table,
+        "-o",
+        tmp.path().join("far.####.exr").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("frame 2") && !e.contains("panicked"), "{e}");
+}
