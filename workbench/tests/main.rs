@@ -31,6 +31,7 @@ mod plugins;
 mod readme;
 mod render;
 mod sensor_stack;
+mod sequence;
 mod stability;
 mod starburst;
 mod sweep;

@@ -16,6 +16,7 @@ mod lenses;
 mod plugins;
 mod precompute;
 mod render;
+mod render_sequence;
 mod stability;
 mod sweep;
 mod trace;

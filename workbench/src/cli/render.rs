@@ -1,7 +1,7 @@
 //! `flarebench render`: ghost flares and diffraction starbursts of a lens for one or more
 //! lights, to EXR or PNG, optionally added onto a background image.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::Context;
@@ -26,6 +26,7 @@ use crate::output::{
 use crate::precomputed::load_precomputed;
 use crate::reference_file::{ReferenceSource, reference_for};
 use crate::report::{ErrorReport, RenderReport, Timings};
+use crate::sequence::{FrameRange, Shard};
 use flarebench_sdk::ghost::ReflectionOrder;
 
 #[derive(Debug, Args)]
@@ -38,7 +39,11 @@ pub struct RenderArgs {
     /// (default 1), colour as a blackbody temperature in kelvin (e.g.
     /// 3200) or linear sRGB R:G:B (e.g. 1:0.8:0.6); default daylight D65. Repeat for several
     /// lights.
-    #[arg(long = "light", required_unless_present = "lights_at", value_parser = LightSpec::parse)]
+    #[arg(
+        long = "light",
+        required_unless_present_any = ["lights_at", "light_path"],
+        value_parser = LightSpec::parse
+    )]
     pub lights: Vec<LightSpec>,
     /// A light given by where it images: X,Y[,INTENSITY[,COLOUR]] — pixel coordinates in the
     /// output image ((0,0) its top-left corner, 960,540 the centre of 1920x1080), the rest as
@@ -118,6 +123,25 @@ pub struct RenderArgs {
     pub json: bool,
     #[command(flatten)]
     pub sensor_stack: crate::sensor_stack::SensorStackArgs,
+    /// Render a numbered sequence: frames A..B, both included (or one frame A), for the
+    /// lights of --light-path; the output is a pattern whose `####` (or `%04d`) becomes the
+    /// frame number (`out.####.exr`). One exposure for every PNG frame. docs/cli.md
+    /// § Sequences.
+    #[arg(long, value_name = "A..B", value_parser = FrameRange::parse, requires = "light_path")]
+    pub frames: Option<FrameRange>,
+    /// The lights of a sequence: keyframes of time (frame), θ, φ, intensity and colour, linear
+    /// or smooth (TOML; docs/formats.md § Light paths). With --frames.
+    #[arg(
+        long,
+        value_name = "FILE",
+        requires = "frames",
+        conflicts_with_all = ["lights", "lights_at", "background", "reference", "reference_file"]
+    )]
+    pub light_path: Option<PathBuf>,
+    /// Render only this share of --frames: the frames with (frame − A) % N == I. Each frame is
+    /// the same whichever shard renders it.
+    #[arg(long, value_name = "I/N", value_parser = Shard::parse, requires = "frames")]
+    pub shard: Option<Shard>,
 }
 
 /// Starburst options shared by `render` and `apply`.
@@ -279,11 +303,14 @@ pub(super) fn parse_downscale(s: &str) -> Result<usize, String> {
     }
 }
 
-fn ms(t: Instant) -> f64 {
+pub(super) fn ms(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
 }
 
 pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
+    if args.frames.is_some() {
+        return super::render_sequence::run(args, quiet);
+    }
     let t_load = Instant::now();
     let loaded = lens_library::load(&args.lens, quiet || args.json)?;
     let system = args.sensor_stack.apply(loaded.system.clone())?;
@@ -352,7 +379,13 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
     };
     let flare_sum = flare.image().sum();
     let flare_max = flare.image().max();
-    write_output(&mut flare, background.as_ref(), &tone, args)?;
+    write_output(
+        &mut flare,
+        background.as_ref(),
+        &tone,
+        &args.output,
+        args.exr_half,
+    )?;
     timings.write_ms = ms(t);
 
     let report = RenderReport {
@@ -384,7 +417,7 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
 
 impl RenderArgs {
     /// The planner's options: the preset's, with `--max-downscale` and `--reflections`.
-    fn plan_options<'a>(&self, table: Option<&'a BoundsTable>) -> PlanOptions<'a> {
+    pub(super) fn plan_options<'a>(&self, table: Option<&'a BoundsTable>) -> PlanOptions<'a> {
         let preset = PlanOptions::for_quality(self.quality, table);
         PlanOptions {
             max_downscale: self.max_downscale.unwrap_or(preset.max_downscale),
@@ -443,28 +476,28 @@ fn reference_error(
 
 /// Writes the frame to `--output`: onto the background when there is one; a PNG of the flare
 /// alone tone mapped by the backend's own pass when it has one (the GPU's).
-fn write_output(
+pub(super) fn write_output(
     flare: &mut Flare,
     background: Option<&HdrImage>,
     tone: &ToneMap,
-    args: &RenderArgs,
+    output: &Path,
+    exr_half: bool,
 ) -> anyhow::Result<()> {
-    let precision = if args.exr_half {
+    let precision = if exr_half {
         ExrPrecision::Half
     } else {
         ExrPrecision::Float
     };
-    let gpu_png =
-        if background.is_none() && OutputFormat::from_path(&args.output)? == OutputFormat::Png {
-            flare.backend_mut().tone_map(tone)?
-        } else {
-            None
-        };
+    let gpu_png = if background.is_none() && OutputFormat::from_path(output)? == OutputFormat::Png {
+        flare.backend_mut().tone_map(tone)?
+    } else {
+        None
+    };
     let img = flare.image();
     match (gpu_png, background) {
-        (Some(rgb), _) => save_png_rgb8(rgb, img.width, img.height, &args.output)?,
-        (None, Some(bg)) => save_image_as(&add_onto(bg, img)?, &args.output, tone, precision)?,
-        (None, None) => save_image_as(img, &args.output, tone, precision)?,
+        (Some(rgb), _) => save_png_rgb8(rgb, img.width, img.height, output)?,
+        (None, Some(bg)) => save_image_as(&add_onto(bg, img)?, output, tone, precision)?,
+        (None, None) => save_image_as(img, output, tone, precision)?,
     }
     Ok(())
 }

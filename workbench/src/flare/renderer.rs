@@ -149,6 +149,13 @@ impl Flare {
         self.lens_tables.as_ref().expect("just built")
     }
 
+    /// Sets the rectangles the next frame's plan starts from (with [`Preset::warm_start`]), in
+    /// place of the last frame's: a sequence starts every frame from the same anchor, so a
+    /// frame does not depend on the frames rendered before it.
+    pub fn set_warm_start(&mut self, warm: Vec<WarmStart>) {
+        self.warm = warm;
+    }
+
     /// Draws one frame of `scene` as `preset` says, into [`Flare::image`]: plan, ghosts,
     /// exposure, starbursts.
     pub fn render(&mut self, scene: &Scene<'_>, preset: &Preset<'_>) -> anyhow::Result<Rendered> {
