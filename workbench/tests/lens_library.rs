@@ -158,7 +158,9 @@ fn every_curated_lens_passes_its_checks_as_its_notes_say() {
         .par_iter()
         .filter_map(|l| {
             let sys = load(l);
-            // The notes give the stability suite's figures, or say it was not run.
+            // The notes give the stability suite's result, or say it was not run. Where it ran,
+            // it runs again here, and the notes must say what it finds: passed, or each finding
+            // outside its limit with its figure (`Checks::note`).
             let stability = !sys.notes.contains("stability --quick: not run");
             let c = checks::run(&l.name, &sys, stability);
             let f = c.failures();

@@ -11,8 +11,10 @@
 //! Far off axis a wide-angle lens's real entrance pupil has moved well away from the paraxial
 //! one (a fisheye's at 60° lies millimetres off the paraxial guess), and the secant method's
 //! start may be vignetted before it reaches the stop. Then heights across the whole entrance
-//! ([`crate::ghost::bounds::entrance_search_rect`]) are sampled, a pair whose stop crossings
-//! lie on either side of the axis is taken, and bisection closes on the chief ray.
+//! ([`crate::ghost::bounds::entrance_search_rect`]) are sampled, and the pairs of neighbours
+//! whose stop crossings lie on either side of the axis are bisected, those whose rays reach
+//! the sensor first: the first bisection that closes on a crossing of the axis (not on a
+//! jump across it, where rays fold back at a rim) gives the chief ray.
 
 use crate::paraxial::{ParaxialError, analyse};
 use crate::system::LensSystem;
@@ -74,39 +76,83 @@ pub fn chief_ray_landing(
     let heights: Vec<f64> = (0..=BRACKET_SAMPLES)
         .map(|k| -half + 2.0 * half * k as f64 / BRACKET_SAMPLES as f64)
         .collect();
-    let crossings: Vec<Option<f64>> = heights
+    let samples: Vec<Option<(f64, Fate)>> = heights
         .iter()
         .map(|&h| {
             hits.clear();
-            seq.trace_with_hits(&Ray::collimated(theta, 0.0, h), &mut hits);
-            hits.iter()
-                .find(|hit| hit.surface == stop)
-                .map(|hit| hit.position.y)
+            let r = seq.trace_with_hits(&Ray::collimated(theta, 0.0, h), &mut hits);
+            let y = hits.iter().find(|hit| hit.surface == stop)?.position.y;
+            Some((y, if r.completed { r.fate } else { STOPPED }))
         })
         .collect();
-    let bracket = (0..BRACKET_SAMPLES).find_map(|k| match (crossings[k], crossings[k + 1]) {
-        (Some(a), Some(b)) if a.signum() != b.signum() || a == 0.0 => {
-            Some((heights[k], a, heights[k + 1]))
-        }
-        _ => None,
-    });
-    let Some((mut lo, mut y_lo, mut hi)) = bracket else {
-        return secant.map(turn);
+    // Every pair of neighbouring heights whose stop crossings lie on either side of the axis,
+    // best first: both rays reaching the sensor unvignetted, then both completing, then the
+    // rest, each group nearest the paraxial start first. A stop crossing can change sign
+    // without passing the axis — where the rays fold back at a rim or a total internal
+    // reflection sets in (the M.Zuiko 8 mm fisheye at 70°: +16.4 mm to −16.4 mm between two
+    // rays outside its front element) —, so each bracket is bisected, and the first that
+    // closes on a crossing of the axis by a ray that completes is the chief ray.
+    let rank = |f: Fate| match f {
+        Fate::Sensor => 0,
+        f if f != STOPPED => 1,
+        _ => 2,
     };
+    let mut brackets: Vec<(usize, f64, usize)> = (0..BRACKET_SAMPLES)
+        .filter_map(|k| match (samples[k], samples[k + 1]) {
+            (Some((a, fa)), Some((b, fb))) if a.signum() != b.signum() || a == 0.0 => {
+                let mid = 0.5 * (heights[k] + heights[k + 1]);
+                Some((rank(fa).max(rank(fb)), (mid - h0).abs(), k))
+            }
+            _ => None,
+        })
+        .collect();
+    brackets.sort_by(|a, b| (a.0, a.1).partial_cmp(&(b.0, b.1)).expect("finite heights"));
+    for &(_, _, k) in &brackets {
+        let y_lo = samples[k].expect("a bracket's rays cross the stop").0;
+        if let Some(h) = bisect(&seq, stop, theta, heights[k], y_lo, heights[k + 1]) {
+            let r = seq.trace(&Ray::collimated(theta, 0.0, h));
+            if r.completed {
+                return Ok(turn([r.ray.origin.x, r.ray.origin.y]));
+            }
+        }
+    }
+    secant.map(turn)
+}
+
+/// The fate recorded for a ray that stopped (missed a surface, total internal reflection)
+/// when ranking brackets: only its rank matters.
+const STOPPED: Fate = Fate::Missed {
+    surface: usize::MAX,
+};
+
+/// Bisection on the stop-crossing height between entrance heights `lo` (crossing at `y_lo`)
+/// and `hi` (crossing on the other side of the axis): the height whose ray crosses the stop
+/// within [`CONVERGED_MM`] of the axis, or `None` when a ray misses the stop or the crossing
+/// jumps across the axis instead of passing through it.
+fn bisect(
+    seq: &Sequence<f64>,
+    stop: usize,
+    theta: f64,
+    mut lo: f64,
+    mut y_lo: f64,
+    mut hi: f64,
+) -> Option<f64> {
+    let mut hits = Vec::new();
+    let mut crossing = |h: f64| {
+        hits.clear();
+        seq.trace_with_hits(&Ray::collimated(theta, 0.0, h), &mut hits);
+        hits.iter()
+            .find(|hit| hit.surface == stop)
+            .map(|hit| hit.position.y)
+    };
+    if y_lo.abs() <= STOP_TOLERANCE_MM {
+        return Some(lo);
+    }
     for _ in 0..BISECTIONS {
         let mid = 0.5 * (lo + hi);
-        hits.clear();
-        seq.trace_with_hits(&Ray::collimated(theta, 0.0, mid), &mut hits);
-        let Some(y) = hits
-            .iter()
-            .find(|hit| hit.surface == stop)
-            .map(|h| h.position.y)
-        else {
-            break;
-        };
+        let y = crossing(mid)?;
         if y.abs() <= STOP_TOLERANCE_MM {
-            lo = mid;
-            break;
+            return Some(mid);
         }
         if y.signum() == y_lo.signum() {
             (lo, y_lo) = (mid, y);
@@ -114,16 +160,14 @@ pub fn chief_ray_landing(
             hi = mid;
         }
     }
-    let r = seq.trace(&Ray::collimated(theta, 0.0, lo));
-    if r.completed {
-        Ok(turn([r.ray.origin.x, r.ray.origin.y]))
-    } else {
-        Err(ChiefRayError::Lost {
-            theta_deg,
-            fate: r.fate,
-        })
-    }
+    (y_lo.abs() <= CONVERGED_MM).then_some(lo)
 }
+
+/// A bisection that ends with the crossing farther than this from the axis (mm) closed on a
+/// jump, not a crossing: after [`BISECTIONS`] halvings of a bracket at most the entrance's
+/// width, a crossing that passes through the axis is within its slope × 2⁻⁶⁰ × that width
+/// of it, far below this.
+const CONVERGED_MM: f64 = 1e-6;
 
 /// Heights sampled across the entrance when the secant method cannot start.
 const BRACKET_SAMPLES: usize = 256;

@@ -1,7 +1,8 @@
-//! The checks every curated lens passes before it is written: its paraxial focal length
-//! against the one its file states, its ghosts rendered finite for lights at 0°, 10° and the
-//! edge of its field, and the quick stability suite (`flarebench stability --quick`, without
-//! the synthetic lenses). The results go into the lens's notes.
+//! The checks of a curated lens: its paraxial focal length against the one its file states
+//! and its ghosts rendered finite for lights at 0°, 10° and the edge of its field, which it
+//! must pass to be written, and the quick stability suite (`flarebench stability --quick`,
+//! without the synthetic lenses), whose result is recorded: the lens's notes say that it
+//! passed, or which findings lay outside their limits and by how much.
 
 use flarebench_sdk::LensSystem;
 use flarebench_sdk::aperture::Aperture;
@@ -60,6 +61,8 @@ pub struct Checks {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Stability {
     pub findings: usize,
+    /// The findings outside their limits, one phrase each (check, case, value, limit; the
+    /// figures to two significant digits, so the phrase does not change with the last bits).
     pub failures: Vec<String>,
 }
 
@@ -69,7 +72,9 @@ impl Checks {
         self.stated_mm.map(|s| self.efl_mm / s - 1.0)
     }
 
-    /// What failed, one sentence each; empty when the lens passes.
+    /// What failed of the checks a lens must pass to be written (focal length, renders), one
+    /// sentence each; empty when it passes them. The stability suite's findings outside their
+    /// limits are recorded in the note instead ([`Checks::note`]).
     pub fn failures(&self) -> Vec<String> {
         let mut out = Vec::new();
         match self.efl_deviation() {
@@ -101,10 +106,13 @@ impl Checks {
                 Err(e) => out.push(format!("no render at θ {:.1}°: {e}", r.theta_deg)),
             }
         }
-        if let Some(s) = &self.stability {
-            out.extend(s.failures.iter().map(|f| format!("stability: {f}")));
-        }
         out
+    }
+
+    /// The stability suite's findings outside their limits (empty when it passed or did not
+    /// run).
+    pub fn stability_failures(&self) -> &[String] {
+        self.stability.as_ref().map_or(&[], |s| &s.failures)
     }
 
     /// The sentence for the lens's notes.
@@ -128,10 +136,14 @@ impl Checks {
             "NOT finite"
         };
         let stability = match &self.stability {
+            Some(s) if s.failures.is_empty() => {
+                format!("passed ({} findings, none outside its limit)", s.findings)
+            }
             Some(s) => format!(
-                "{} findings, {} outside their limits",
+                "FAILED, {} of {} findings outside their limits: {}",
+                s.failures.len(),
                 s.findings,
-                s.failures.len()
+                s.failures.join("; ")
             ),
             None => "not run".into(),
         };
@@ -140,6 +152,15 @@ impl Checks {
              field's edge; {RENDER_WIDTH} px wide, fast preset); stability --quick: {stability}.",
             angles.join(", "),
         )
+    }
+}
+
+/// `x` to two significant digits (`1.1e-3`; whole numbers as they are).
+fn two_digits(x: f64) -> String {
+    if x.fract() == 0.0 && x.abs() < 1e6 {
+        format!("{x}")
+    } else {
+        format!("{x:.1e}")
     }
 }
 
@@ -203,7 +224,18 @@ pub fn run(name: &str, system: &LensSystem, stability: bool) -> Checks {
                 .findings
                 .iter()
                 .filter(|f| !f.pass)
-                .map(|f| format!("{} at {}: {} (limit {})", f.check, f.case, f.value, f.limit))
+                .map(|f| {
+                    if f.value.is_nan() {
+                        return format!("{} at {}: not measured ({})", f.check, f.case, f.note);
+                    }
+                    format!(
+                        "{} at {}: {} (limit {})",
+                        f.check,
+                        f.case,
+                        two_digits(f.value),
+                        two_digits(f.limit)
+                    )
+                })
                 .collect(),
         }
     });

@@ -3,7 +3,12 @@
 //!
 //! The edge of the field is where the chief ray lands on the film's corner (half its
 //! diagonal), found from the real chief ray, not the paraxial focal length: a fisheye's edge
-//! lies far beyond `atan(half diagonal / EFL)`.
+//! lies far beyond `atan(half diagonal / EFL)`. A lens whose image never reaches the corner
+//! (a lens made for a smaller film) has its field end where its chief ray's image height is
+//! largest: the rim of its image circle. Beyond it the height falls back as the angle grows
+//! (the Ricoh 18.3 mm f/2.5 on 36 × 24 mm: 15.46 mm at 57°, 15.19 mm at 61°, the corner
+//! 21.6 mm) — distortion turning over, which no larger field angle can undo, not an aiming
+//! defect — so the height check stops there.
 
 use flarebench_sdk::LensSystem;
 use flarebench_sdk::aperture::Aperture;
@@ -17,8 +22,9 @@ use super::{Finding, SuiteOptions, default_plan, frame_of, precision_findings, r
 
 /// Largest angle of a light (degrees): grazing.
 pub const GRAZING_DEG: f64 = 89.0;
-/// Entrance heights of the fan that tells whether direct light reaches the sensor, and
-/// whether the rays that do cross the stop on both sides of its centre.
+/// Entrance heights of the fan that tells whether direct light reaches the sensor (rays that
+/// pass every clear aperture), and whether the rays that do cross the stop on both sides of
+/// its centre.
 const FAN_RAYS: usize = 2049;
 
 /// What the chief-ray scan found at one angle.
@@ -48,7 +54,10 @@ fn aim(system: &LensSystem, seq: &Sequence<f64>, stop: usize, theta: f64) -> Aim
         let h = -half + 2.0 * half * k as f64 / (FAN_RAYS - 1) as f64;
         hits.clear();
         let r = seq.trace_with_hits(&Ray::collimated(theta, 0.0, h), &mut hits);
-        if !r.completed {
+        // Only light: a ray that completes its path outside some clear aperture carries none
+        // (beyond the Fujinon XF33's field, at 43°, every ray that completes passes outside
+        // its front element).
+        if !r.fate.reached_sensor() {
             continue;
         }
         if let Some(hit) = hits.iter().find(|hit| hit.surface == stop) {
@@ -79,28 +88,37 @@ fn scan(system: &LensSystem) -> FieldScan {
             (deg, aim(system, &seq, stop, deg.to_radians()))
         })
         .collect();
-    // The first angle whose chief ray lands past the corner, interpolated; else the last
-    // angle where one was found.
-    let mut edge_deg = 0.0;
+    FieldScan {
+        edge_deg: field_edge(&aims, corner),
+        aims,
+    }
+}
+
+/// The edge of the field (degrees) from the chief rays `aims`: the first angle whose chief ray
+/// lands past `corner` (mm), interpolated; else the angle whose chief ray lands highest (the
+/// rim of the lens's image circle), the first of equals; 0 when none was found.
+fn field_edge(aims: &[(f64, Aim)], corner: f64) -> f64 {
     let mut last: Option<(f64, f64)> = None;
-    for &(deg, a) in &aims {
+    let mut highest: Option<(f64, f64)> = None;
+    for &(deg, a) in aims {
         let Aim::Found(y) = a else { continue };
         let h = y.abs();
         if h >= corner {
-            edge_deg = match last {
+            return match last {
                 Some((d0, h0)) if h > h0 => d0 + (deg - d0) * (corner - h0) / (h - h0),
                 _ => deg,
             };
-            return FieldScan { aims, edge_deg };
+        }
+        if highest.is_none_or(|(_, top)| h > top) {
+            highest = Some((deg, h));
         }
         last = Some((deg, h));
-        edge_deg = deg;
     }
-    FieldScan { aims, edge_deg }
+    highest.map_or(0.0, |(deg, _)| deg)
 }
 
 /// The edge of `system`'s field (degrees): where its chief ray lands on the film's corner,
-/// else the largest angle where a chief ray was found (the lens must have a stop).
+/// else where its chief ray lands highest (the lens must have a stop).
 pub fn edge_deg(system: &LensSystem) -> f64 {
     scan(system).edge_deg
 }
@@ -208,6 +226,21 @@ pub fn check_lens(name: &str, system: &LensSystem, options: SuiteOptions) -> Vec
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_field_ends_at_the_corner_or_where_the_image_height_turns_over() {
+        let found = |v: &[(f64, f64)]| -> Vec<(f64, Aim)> {
+            v.iter().map(|&(d, y)| (d, Aim::Found(y))).collect()
+        };
+        // Past the corner (10 mm) between 2° and 3°: interpolated.
+        let a = found(&[(0.0, 0.0), (1.0, 4.0), (2.0, 8.0), (3.0, 12.0)]);
+        assert_eq!(field_edge(&a, 10.0), 2.5);
+        // Never past it: where the height is largest, not the last angle found.
+        let mut b = found(&[(0.0, 0.0), (1.0, 4.0), (2.0, 6.0), (3.0, 5.5), (4.0, 5.0)]);
+        b.push((5.0, Aim::Dark));
+        assert_eq!(field_edge(&b, 10.0), 2.0);
+        assert_eq!(field_edge(&[(0.0, Aim::Dark)], 10.0), 0.0);
+    }
 
     #[test]
     fn light_angles_reach_past_the_edge_and_end_grazing() {

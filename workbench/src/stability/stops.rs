@@ -26,8 +26,19 @@ pub const OVER_OPEN: f64 = 2.0;
 const LIGHT_DEG: f64 = 5.0;
 /// The direct flux at f/64 against the paraxial pupil's area (relative): the bounds search
 /// integrates over a 65² grid with the pupil's edge placed between vertices (measured within
-/// 0.1%), the Monte-Carlo estimate has its sampling error (about 0.1% at these rays).
+/// 0.1%). The Monte-Carlo estimate is held to this plus [`PUPIL_MC_SIGMAS`] of its own
+/// standard error.
 pub const PUPIL_FLUX_LIMIT: f64 = 5e-3;
+/// Standard errors the Monte-Carlo pupil flux may lie from the analytic one beyond
+/// [`PUPIL_FLUX_LIMIT`]. Its error is about 0.1% where the pilot grid zooms onto the pupil;
+/// where a fold at the front element's rim (rays there swing across the stop before total
+/// internal reflection stops them) keeps active pilot cells far from the axis, the pilot
+/// cannot zoom and the pupil gets a few of the cells the rays are spread over: 1.4% and 4.6%
+/// (the Viltrox 33 mm f/1.4, the Hasselblad HC 50 mm), whose estimates lay 1.3 and 0.12
+/// standard errors from the analytic flux. An unbiased estimate from 16 batches lies beyond 3
+/// standard errors in about 1% of lenses (Student's t, 15 degrees of freedom); a flux error the estimate's own noise hides is not one it can
+/// show, and the note gives the error, so a weak check reads as one.
+pub const PUPIL_MC_SIGMAS: f64 = 3.0;
 /// Monte-Carlo rays for the pupil flux (quick suite; the full one traces four times as many).
 const PUPIL_MC_RAYS: usize = 1 << 16;
 /// The wavelength the fluxes are measured at (nm).
@@ -120,14 +131,16 @@ pub fn check_lens(name: &str, system: &LensSystem, options: SuiteOptions) -> Vec
             ..McSettings::default()
         },
     );
+    let sigma = (mc.std_error / want).abs();
     out.push(Finding::measured(
         "pupil-flux-mc",
         name,
         case,
         (mc.mean / want - 1.0).abs(),
-        PUPIL_FLUX_LIMIT,
+        PUPIL_FLUX_LIMIT + PUPIL_MC_SIGMAS * sigma,
         format!(
-            "the Monte-Carlo direct flux {:.4e} ± {:.1e} mm² against π (D_EP/2)² × T",
+            "the Monte-Carlo direct flux {:.4e} ± {:.1e} mm² against π (D_EP/2)² × T (limit \
+             {PUPIL_FLUX_LIMIT} + {PUPIL_MC_SIGMAS} × its relative standard error {sigma:.1e})",
             mc.mean, mc.std_error
         ),
     ));
