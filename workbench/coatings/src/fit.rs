@@ -177,10 +177,9 @@ struct Reduced {
     /// `yᵀy − ‖z‖²` per channel: the squared residual no coefficients can remove.
     floor: f64,
     pixels: usize,
-    yy: f64,
 }
 
-fn reduce(basis: &Basis, target: &Target) -> Reduced {
+fn reduce(basis: &Basis, target: &Target) -> Result<Reduced, CoatingError> {
     let bands: Vec<&crate::basis::BandImage> =
         basis.ghosts.iter().flat_map(|g| g.bands.iter()).collect();
     let n = bands.len();
@@ -208,7 +207,7 @@ fn reduce(basis: &Basis, target: &Target) -> Reduced {
                 .collect()
         })
         .collect();
-    let mut m = DMatrix::from_fn(n, n, |i, j| rows[i][j]);
+    let m = DMatrix::from_fn(n, n, |i, j| rows[i][j]);
     let v: [DVector<f64>; 3] = std::array::from_fn(|ch| {
         DVector::from_iterator(
             n,
@@ -245,9 +244,10 @@ fn reduce(basis: &Basis, target: &Target) -> Reduced {
             break c;
         }
         ridge *= 10.0;
+        // A positive semidefinite Gram matrix factors long before this; one that does not
+        // holds non-finite values.
         if ridge > scale {
-            // Unreachable for a positive semidefinite Gram matrix; keep a diagonal one.
-            m.fill_with_identity();
+            return Err(CoatingError::Colours);
         }
     };
     let l = chol.l();
@@ -256,13 +256,12 @@ fn reduce(basis: &Basis, target: &Target) -> Reduced {
             .unwrap_or_else(|| DVector::zeros(n))
     });
     let floor = yy - z.iter().map(|z| z.norm_squared()).sum::<f64>();
-    Reduced {
+    Ok(Reduced {
         lt: l.transpose(),
         z,
         floor: floor.max(0.0),
         pixels: mask.iter().filter(|m| **m).count(),
-        yy,
-    }
+    })
 }
 
 /// The fit's residuals for parameters `p` (coatings, then gains when fitted).
@@ -501,7 +500,7 @@ pub fn fit(
         let ev = Evaluator {
             model,
             bins: Reweighter::new(&basis, &system)?,
-            reduced: reduce(&basis, target),
+            reduced: reduce(&basis, target)?,
             basis: &basis,
             fit_gains: options.fit_gains,
         };
@@ -751,7 +750,6 @@ fn summarise(
             den += y * y;
         }
     }
-    let _ = ev.reduced.yy;
     Ok(Fit {
         params,
         gains,

@@ -36,7 +36,7 @@ pub enum CoatingError {
     MaskSize,
     #[error("no starting point to fit from")]
     NoStart,
-    #[error("the ghosts' colours could not be computed")]
+    #[error("the ghosts' colours or images could not be used (non-finite values)")]
     Colours,
     #[error(
         "lens `{0}` has a sensor stack: fitting and choosing coatings model the lens's own surfaces only; remove it (`--sensor-stack none` on `convert`) first"
