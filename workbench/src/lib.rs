@@ -6,6 +6,7 @@ pub mod algo_spec;
 pub mod aperture_file;
 pub mod cli;
 pub mod curation;
+pub mod dataset;
 pub mod document;
 #[cfg(feature = "tui")]
 pub mod edit;

@@ -7,6 +7,7 @@ mod compare;
 mod convert;
 mod crosscheck;
 mod curate;
+mod dataset;
 #[cfg(feature = "tui")]
 mod edit;
 mod fit;
@@ -45,6 +46,9 @@ pub enum Command {
     /// List the bundled lenses (name, maker, focal length, f-number, kind, elements, ghosts),
     /// filtered by maker, focal length, f-number, kind or words.
     Lenses(lenses::LensesArgs),
+    /// Render a seeded, sharded, resumable dataset of random flares with layers and
+    /// annotations (docs/datasets.md); `dataset verify DIR` checks one.
+    Dataset(dataset::DatasetArgs),
     /// Render lenses' flares side by side at a standard light into a folder: a contact sheet
     /// and an offline index.html with each lens's section and figures (cached, resumable).
     Gallery(gallery::GalleryArgs),
@@ -101,6 +105,7 @@ pub fn main() -> ExitCode {
         Command::Info(a) => info::run(a, cli.quiet),
         Command::Lenses(a) => lenses::run(a, cli.quiet),
         Command::Gallery(a) => gallery::run(a, cli.quiet),
+        Command::Dataset(a) => dataset::run(a, cli.quiet),
         Command::Curate(a) => curate::run(a, cli.quiet),
         Command::Trace(a) => trace::run(a, cli.quiet),
         Command::Render(a) => render::run(a, cli.quiet),
