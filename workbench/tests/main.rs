@@ -11,6 +11,7 @@ mod offscreen_viewer;
 mod cli;
 mod coatings;
 mod convert;
+mod dataset;
 #[cfg(feature = "tui")]
 mod edit_app;
 #[cfg(feature = "tui")]
