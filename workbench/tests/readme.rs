@@ -15,8 +15,8 @@ use flarebench_sdk::image::HdrImage;
 const SKIPPED: [(&str, &str); 1] = [("flarebench edit", "interactive (tested in edit_tmux.rs)")];
 
 /// The user's own files some transcripts name, made in the block's directory first: an HDR
-/// scene with two lights (`apply`), a lens file with a broken field (`info`) and a light path
-/// (`render --frames`).
+/// scene with two lights (`apply`), a lens file with a broken field (`info`), a light path
+/// (`render --frames`) and a dataset sampler (`dataset`).
 fn make_fixtures(dir: &Path) {
     let (w, h) = (640, 480);
     let mut scene = HdrImage::new(w, h);
@@ -36,12 +36,18 @@ fn make_fixtures(dir: &Path) {
     )
     .unwrap();
     std::fs::write(dir.join("path.toml"), LIGHT_PATH).unwrap();
+    std::fs::write(dir.join("sampler.toml"), SAMPLER).unwrap();
 }
 
 /// The light path of `docs/cli.md` § Sequences.
 const LIGHT_PATH: &str = "[[light]]\ninterpolation = \"smooth\"\nkey = [\n  \
     { frame = 1, theta = 2, phi = 60 },\n  { frame = 3, theta = 8, phi = 60, intensity = 2 },\n  \
     { frame = 4, theta = 9, phi = 75 },\n]\n";
+
+/// The sampler of `docs/datasets.md` § A first dataset.
+const SAMPLER: &str = "size = [64, 48]\nquality = \"fast\"\nstarburst_texels = 64\n\n[lenses]\n\
+    names = [\"heliar-tronnier\", \"double-gauss-50mm\"]\n\
+    weights = { \"heliar-tronnier\" = 2 }\n\n[lights]\ncount = [1, 2]\nev = [0, 2]\n";
 
 /// The fewest commands that run here, per document that must have them.
 const MIN_CHECKED: [(&str, usize); 2] = [("README.md", 6), ("docs/cli.md", 12)];
