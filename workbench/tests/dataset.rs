@@ -498,3 +498,41 @@ fn a_bad_sampler_names_the_file_line_and_field() {
     }
     assert!(!out.exists(), "nothing is written for a bad sampler");
 }
+
+#[test]
+fn the_defaults_and_the_library_filters_choose_the_lenses() {
+    let defaults = Sampler::with_defaults().unwrap();
+    let core = flarebench::lens_library::core_names();
+    let names: Vec<&str> = defaults.lenses().iter().map(|l| l.name.as_str()).collect();
+    assert_eq!(names, core.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(defaults.lenses().iter().all(|l| l.weight == 1.0));
+    let s = defaults.sample(0, 0).unwrap();
+    assert_eq!(s.size, [512, 512]);
+    assert!((1.4..=16.0).contains(&s.f_number));
+    assert!((1..=3).contains(&s.lights.len()));
+
+    // Core lenses of 90–110 mm: the two Heliars (100 mm), not the 50 mm double Gauss nor the
+    // 10 mm fisheye.
+    let text = "[lenses]\nfocal_mm = [90, 110]\n";
+    let near_100 = Sampler::from_toml_str(text, "focal", Path::new(".")).unwrap();
+    let names: Vec<&str> = near_100.lenses().iter().map(|l| l.name.as_str()).collect();
+    assert!(names.contains(&"heliar-tronnier"), "{names:?}");
+    assert!(!names.contains(&"double-gauss-50mm"), "{names:?}");
+    assert!(!names.contains(&"fisheye-10mm"), "{names:?}");
+
+    let err = Sampler::from_toml_str("[lenses]\nfocal_mm = [1, 2]\n", "none", Path::new("."))
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("no lens matches the filters"), "{err}");
+    let err = Sampler::from_toml_str(
+        "[lenses]\nnames = [\"heliar-tronnier\"]\nweights = { \"fisheye-10mm\" = 2 }\n",
+        "weights",
+        Path::new("."),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        err.contains("line 3, column 1, field `lenses.weights`: `fisheye-10mm` is not one of"),
+        "{err}"
+    );
+}
