@@ -5,7 +5,9 @@
 //!
 //! Test plugins — libraries named `flarebench_test_*` (`libflarebench_test_….so`), which
 //! `cargo build --workspace` puts beside the binary for the host's tests — are not discovered
-//! unless [`TEST_PLUGINS_VAR`] is `1`; a path given explicitly always loads.
+//! unless [`TEST_PLUGINS_VAR`] is `1`; a path given explicitly always loads. The Python
+//! module's library ([`NOT_PLUGINS`]), which the same build puts there, is no plugin and is
+//! never discovered.
 
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
@@ -20,6 +22,11 @@ pub const TEST_PLUGINS_VAR: &str = "FLAREBENCH_TEST_PLUGINS";
 /// The library name (after the platform's `lib` prefix) that marks a plugin built for the
 /// host's tests.
 pub const TEST_PLUGIN_PREFIX: &str = "flarebench_test_";
+
+/// Library names (after the platform's `lib` prefix) of the workspace's shared libraries that
+/// are not plugins: the Python module (`workbench/python`, `lib_flarebench.so`), which cannot
+/// even be loaded outside a Python interpreter.
+pub const NOT_PLUGINS: &[&str] = &["_flarebench"];
 
 /// A library found, loaded or not.
 #[derive(Debug)]
@@ -73,7 +80,9 @@ pub fn discover(explicit: &[PathBuf]) -> Vec<Found> {
             .flatten()
             .map(|e| e.path())
             .filter(|p| {
-                library_name(p).is_some_and(|n| tests || !n.starts_with(TEST_PLUGIN_PREFIX))
+                library_name(p).is_some_and(|n| {
+                    !NOT_PLUGINS.contains(&n) && (tests || !n.starts_with(TEST_PLUGIN_PREFIX))
+                })
             })
             .collect();
         libs.sort();

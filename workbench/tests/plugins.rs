@@ -23,6 +23,26 @@ fn with_test_plugins(args: &[&str]) -> std::process::Output {
         .unwrap()
 }
 
+/// The Python module's library, which `cargo build --workspace` puts beside the binary, is not
+/// taken for a (broken) plugin.
+#[test]
+fn the_python_module_beside_the_binary_is_not_listed_as_a_plugin() {
+    let module = beside_binary("_flarebench");
+    let v = json(&["plugins", "list", "--json"]);
+    let paths: Vec<&str> = v["plugins"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|p| p["path"].as_str())
+        .collect();
+    assert!(!paths.is_empty(), "{v}");
+    assert!(
+        !paths.iter().any(|p| Path::new(p) == module),
+        "{} listed: {paths:?}",
+        module.display()
+    );
+}
+
 /// The names `plugins list --json` shows.
 fn listed(v: &serde_json::Value) -> Vec<String> {
     v["plugins"]

@@ -16,7 +16,9 @@ mod info;
 mod lenses;
 mod plugins;
 mod precompute;
-mod render;
+// Public for the Python module (workbench/python): its frames take the same iris, starburst
+// and light options, read by the same code.
+pub mod render;
 mod render_sequence;
 mod stability;
 mod sweep;
