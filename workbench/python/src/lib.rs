@@ -6,12 +6,13 @@
 //! - [`lens`]: `Lens`, a lens file or bundled lens read and analysed.
 //! - [`lights`]: Python light descriptions into the CLI's `--light` and `--light-at`.
 //! - [`render`]: `render`, one frame (or its layers), the GIL released while it is drawn.
+//! - [`dataset`]: `Sampler`, the sampler of `flarebench dataset`: samples drawn from
+//!   `(seed, index)` and rendered with their layers and annotation, the GIL released.
 //! - [`errors`]: Rust errors into Python exceptions.
 //!
-//! Each binding is a submodule registered below; the dataset sampler (`flarebench dataset`)
-//! is to be bound the same way, as a `dataset` module beside these, on the sampler the CLI
-//! uses.
+//! Each binding is a submodule registered below.
 
+mod dataset;
 mod errors;
 mod lens;
 mod lights;
@@ -24,6 +25,7 @@ use pyo3::prelude::*;
 fn _flarebench(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_class::<lens::Lens>()?;
+    m.add_class::<dataset::Sampler>()?;
     m.add_function(wrap_pyfunction!(render::render, m)?)?;
     Ok(())
 }
