@@ -1,9 +1,11 @@
-"""A small OpenEXR reader for the tests: what `flarebench render -o x.exr` writes.
+"""A small OpenEXR reader for the tests: what `flarebench render -o x.exr` and
+`flarebench dataset` write.
 
-That is one part of scan lines, channels of 32-bit floats, uncompressed or ZIP/ZIPS
-compressed (the OpenEXR 2 file layout: a header of attributes, a table of chunk offsets,
-then chunks of `y`, size, data). Nothing else is read; anything else raises ValueError.
-Only the standard library and NumPy are used, so the tests need no OpenEXR package.
+That is one part of scan lines, channels of 32-bit floats or unsigned ints (a dataset's
+`ghost_id`), uncompressed or ZIP/ZIPS compressed (the OpenEXR 2 file layout: a header of
+attributes, a table of chunk offsets, then chunks of `y`, size, data). Nothing else is read;
+anything else raises ValueError. Only the standard library and NumPy are used, so the tests
+need no OpenEXR package.
 """
 
 import struct
@@ -14,7 +16,8 @@ import numpy as np
 MAGIC = 20000630
 # Compression codes (ImfCompression.h) and the scan lines per chunk of each kind read here.
 LINES_PER_CHUNK = {0: 1, 2: 1, 3: 16}  # NONE, ZIPS, ZIP
-FLOAT = 2  # a channel's pixel type: UINT 0, HALF 1, FLOAT 2
+# A channel's pixel type (UINT 0, HALF 1, FLOAT 2) → its NumPy type; HALF is not read here.
+PIXEL_TYPES = {0: "<u4", 2: "<f4"}
 
 
 def _attributes(data):
@@ -60,8 +63,8 @@ def _unzip(raw, expected):
     return out.tobytes()
 
 
-def read_exr(path):
-    """The image at `path` as an H×W×3 float32 array (channels R, G, B)."""
+def read_channels(path):
+    """Every channel of the image at `path` by name: H×W arrays, float32 or uint32."""
     with open(path, "rb") as f:
         data = f.read()
     magic, version = struct.unpack_from("<ii", data, 0)
@@ -74,12 +77,13 @@ def read_exr(path):
     if compression not in LINES_PER_CHUNK:
         raise ValueError(f"{path}: compression {compression} is not read here")
     channels = _channels(attrs["channels"][1])
-    if any(ptype != FLOAT for _, ptype in channels):
-        raise ValueError(f"{path}: a channel is not 32-bit float: {channels}")
+    if any(ptype not in PIXEL_TYPES for _, ptype in channels):
+        raise ValueError(f"{path}: a channel is neither 32-bit float nor uint: {channels}")
     lines = LINES_PER_CHUNK[compression]
     chunks = (height + lines - 1) // lines
     offsets = struct.unpack_from(f"<{chunks}Q", data, pos)
-    planes = np.empty((height, len(channels), width), dtype="<f4")
+    # Every type read here is 4 bytes: a line holds each channel's `width` samples in turn.
+    planes = np.empty((height, len(channels), width * 4), dtype=np.uint8)
     for offset in offsets:
         y, size = struct.unpack_from("<ii", data, offset)
         raw = data[offset + 8 : offset + 8 + size]
@@ -87,9 +91,27 @@ def read_exr(path):
         expected = n * len(channels) * width * 4
         block = raw if size == expected else _unzip(raw, expected)
         row = y - ymin
-        planes[row : row + n] = np.frombuffer(block, dtype="<f4").reshape(
-            n, len(channels), width
+        planes[row : row + n] = np.frombuffer(block, dtype=np.uint8).reshape(
+            n, len(channels), width * 4
         )
-    names = [name for name, _ in channels]
-    rgb = [names.index(c) for c in ("R", "G", "B")]
-    return np.ascontiguousarray(planes[:, rgb, :].transpose(0, 2, 1)).astype(np.float32)
+    return {
+        name: np.ascontiguousarray(planes[:, k, :]).view(PIXEL_TYPES[ptype]).astype(
+            PIXEL_TYPES[ptype][1:]
+        )
+        for k, (name, ptype) in enumerate(channels)
+    }
+
+
+def read_layer(channels, layer=""):
+    """The RGB layer `layer` (`""` the image, `"ghosts"`, `"light0"`, …) of `read_channels`'
+    result as an H×W×3 float32 array."""
+    prefix = f"{layer}." if layer else ""
+    return np.stack([channels[prefix + c] for c in "RGB"], axis=-1).astype(np.float32)
+
+
+def read_exr(path):
+    """The image at `path` as an H×W×3 float32 array (channels R, G, B)."""
+    channels = read_channels(path)
+    if any(a.dtype != np.float32 for a in channels.values()):
+        raise ValueError(f"{path}: a channel is not 32-bit float: {sorted(channels)}")
+    return read_layer(channels)
