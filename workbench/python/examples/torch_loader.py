@@ -1,14 +1,16 @@
-"""Flares for training, generated on the fly: a PyTorch-style dataset over flarebench.
+"""Flares for training, generated on the fly: a PyTorch-style dataset over flarebench.Sampler.
 
-Each sample is a pure function of (seed, index): the lens, the light (angle, azimuth,
-intensity in stops, colour temperature) and the iris are drawn from a NumPy generator seeded
-with both, then rendered by ``flarebench.render``. The dataset has ``__len__`` and
-``__getitem__``; with PyTorch installed it is a ``torch.utils.data.Dataset`` fed to a
-``DataLoader`` (workers render in parallel, and the GIL is released while they do), and
-without it the same samples are batched with NumPy.
+Sample ``i`` is sample ``i`` of ``flarebench dataset --seed SEED --config sampler.toml``:
+``flarebench.Sampler`` draws its lens, f-number, aperture and lights from (seed, i) alone and
+renders it, so every worker, epoch and machine gets the same bits, equal to the CLI's files.
+The dataset has ``__len__`` and ``__getitem__``; with PyTorch installed it is a
+``torch.utils.data.Dataset`` fed to a ``DataLoader`` (workers render in parallel, the GIL
+released while they do; the sampler pickles to reach them), and without it the same samples
+are batched with NumPy.
 
     python workbench/python/examples/torch_loader.py            # 8 samples, 64×64
     python workbench/python/examples/torch_loader.py --count 32 --size 256
+    python workbench/python/examples/torch_loader.py --config sampler.toml
 """
 
 import argparse
@@ -28,56 +30,63 @@ except ImportError:  # the example runs without torch: NumPy batches instead
 LENSES = ["heliar-tronnier", "double-gauss-50mm", "cooke-triplet-25mm"]
 
 
-class FlareDataset(Dataset):
-    """``count`` flares of ``size``×``size`` pixels, sample ``i`` drawn from (seed, i).
+def sampler_toml(size, lenses=LENSES):
+    """A small sampler (docs/datasets.md § The sampler): square frames at the fast preset."""
+    names = ", ".join(f'"{n}"' for n in lenses)
+    return f"""\
+size = [{size}, {size}]
+quality = "fast"
+starburst_texels = 64
 
-    A sample is ``(image, params)``: the flare as a 3×H×W float32 array (a tensor with
-    torch), linear RGB, and the parameters it was drawn with.
+[lenses]
+names = [{names}]
+
+[lights]
+count = [1, 2]
+ev = [-2, 4]
+"""
+
+
+class FlareDataset(Dataset):
+    """``count`` flares, sample ``i`` the sampler's sample (seed, i).
+
+    ``config`` is a sampler file, its TOML text, or None for ``sampler_toml(size)``. A
+    sample is ``(image, info)``: the flare as a 3×H×W float32 array (a tensor with torch),
+    linear RGB, and a few of its parameters (``index``, ``lens``, ``f_number``, ``lights``;
+    numbers and strings, which a DataLoader collates). ``render(i)`` gives every layer and the
+    whole annotation.
     """
 
-    def __init__(self, count, seed=0, size=64, lenses=LENSES, quality="fast"):
+    def __init__(self, count, seed=0, size=64, config=None):
         self.count = count
         self.seed = seed
-        self.size = size
-        self.lenses = list(lenses)
-        self.quality = quality
-        self._loaded = {}  # name -> flarebench.Lens, read once per process
+        self.sampler = flarebench.Sampler(sampler_toml(size) if config is None else config)
 
     def __len__(self):
         return self.count
 
     def params(self, index):
-        """The sample's parameters: a function of (seed, index) alone."""
-        rng = np.random.default_rng([self.seed, index])
-        return {
-            "lens": self.lenses[rng.integers(len(self.lenses))],
-            "theta": float(rng.uniform(0.5, 20.0)),
-            "phi": float(rng.uniform(0.0, 360.0)),
-            "intensity": float(2.0 ** rng.uniform(-2.0, 4.0)),
-            "kelvin": float(rng.uniform(2700.0, 7500.0)),
-            "blades": int(rng.choice([0, 5, 6, 7, 9])),
-            "roundness": float(rng.uniform(0.0, 0.5)),
-        }
+        """The sample's parameters, drawn without rendering: a function of (seed, index)."""
+        return self.sampler.sample(self.seed, index)
 
-    def _lens(self, name):
-        if name not in self._loaded:
-            self._loaded[name] = flarebench.Lens(name)
-        return self._loaded[name]
-
-    def __getitem__(self, index):
+    def render(self, index):
+        """The sample rendered: ``image``, ``ghosts``, ``starburst``, ``ghost_id``, …, and its
+        ``annotation`` (docs/python.md § Datasets)."""
         if not 0 <= index < self.count:
             raise IndexError(index)
-        p = self.params(index)
-        aperture = {"blades": p["blades"], "roundness": p["roundness"]} if p["blades"] else None
-        image = flarebench.render(
-            self._lens(p["lens"]),
-            [(p["theta"], p["phi"], p["intensity"], p["kelvin"])],
-            size=(self.size, self.size),
-            quality=self.quality,
-            aperture=aperture,
-        )
-        chw = np.ascontiguousarray(image.transpose(2, 0, 1))
-        return (torch.from_numpy(chw) if torch is not None else chw), p
+        return self.sampler.render(self.seed, index)
+
+    def __getitem__(self, index):
+        out = self.render(index)
+        sample = out["annotation"]["sample"]
+        info = {
+            "index": index,
+            "lens": sample["lens"],
+            "f_number": out["annotation"]["lens"]["working_f_number"],
+            "lights": len(sample["lights"]),
+        }
+        chw = np.ascontiguousarray(out["image"].transpose(2, 0, 1))
+        return (torch.from_numpy(chw) if torch is not None else chw), info
 
 
 def numpy_batches(dataset, batch_size):
@@ -93,10 +102,11 @@ def main():
     ap.add_argument("--size", type=int, default=64)
     ap.add_argument("--batch-size", type=int, default=4)
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--config", help="a sampler file (default: a small one, --size square)")
     args = ap.parse_args()
-    dataset = FlareDataset(args.count, seed=args.seed, size=args.size)
+    dataset = FlareDataset(args.count, seed=args.seed, size=args.size, config=args.config)
     if torch is not None:
-        # The default collate stacks the images and turns each parameter into a list.
+        # The default collate stacks the images and each parameter (a tensor or a list).
         batches = DataLoader(dataset, batch_size=args.batch_size, num_workers=2)
     else:
         batches = numpy_batches(dataset, args.batch_size)
