@@ -77,8 +77,8 @@ pub(crate) fn advance_dyn<T: Real>(s: &Step<T>, p: &mut [T; 3], d: &mut [T; 3]) 
 
 /// Intersects the ray `(p, d)` (`d` a unit vector) with the surface of `s` and applies the
 /// interaction `MODE` (`REFRACT`, `REFLECT`, `SENSOR`) for a surface of shape `SHAPE`
-/// (`SPHERE`, `CONIC`, `ASPHERE`; the sensor plane is a sphere of curvature 0). `p` and `d` are updated in place; on failure they hold unspecified values and
-/// `status` says why.
+/// (`SPHERE`, `CONIC`, `ASPHERE`; the sensor plane is a sphere of curvature 0). `p` and `d`
+/// are updated in place; on failure they hold unspecified values and the flags say why.
 #[inline(always)]
 pub(crate) fn advance<T: Real, const MODE: u8, const SHAPE: u8>(
     s: &Step<T>,
@@ -89,27 +89,49 @@ pub(crate) fn advance<T: Real, const MODE: u8, const SHAPE: u8>(
     let zero = T::zero();
     let two = one + one;
     let [dx, dy, dz] = *d;
-    // 1. Transfer to the vertex tangent plane (vertex-local coordinates).
-    let t0 = (s.z - p[2]) / dz;
-    let x = p[0] + t0 * dx;
-    let y = p[1] + t0 * dy;
-    // 2. Conic: A t² − 2B t + C = 0 with |d| = 1.
     let (c, k) = (s.c, s.k);
-    let a = c * (one + k * dz * dz);
-    let b = dz - c * (x * dx + y * dy);
-    let q = c * (x * x + y * y);
-    let disc = b * b - a * q;
+    let ck = c * (one + k);
+    // 1. The ray's point in vertex-local coordinates, and where the ray crosses the vertex
+    //    tangent plane (`t0` along it; `x`, `y` there).
+    let (px, py, pz) = (p[0], p[1], p[2] - s.z);
+    let t0 = -pz / dz;
+    let x = px + t0 * dx;
+    let y = py + t0 * dy;
+    // 2. The conic F(h) = c(x² + y²) + c(1+k)z² − 2z = 0 along the ray h = P + t·d, from the
+    //    ray's own point: A t² − 2B t + C = 0 with
+    //    A = c(dx² + dy² + (1+k)dz²), B = N(P)·d, C = F(P),
+    //    N(h) = (−c·x, −c·y, 1 − c(1+k)z) the unnormalised normal. (A takes |d| as it is, so a
+    //    direction a few ulps from unit length moves nothing.)
+    let a = c * (dx * dx + dy * dy) + ck * dz * dz;
+    let b = dz - c * (px * dx + py * dy) - ck * pz * dz;
+    let cc = c * (px * px + py * py) + (ck * pz - two) * pz;
+    let disc = b * b - a * cc;
     let sq = disc.max(zero).sqrt();
+    // 3. Which root. B is linear along the ray (B(t) = B − A t) and at a root equals ∓√disc:
+    //    the two roots lie on either side of the point where it changes sign (a sphere's chord's
+    //    midpoint). The sheet through the vertex is the root on the side of the ray's crossing
+    //    of the tangent plane, where B is `b_vertex` (Spencer & Murty start there and take the
+    //    root with B(t) of its sign): the root near P, `C / (B ± √disc)`, when `b_vertex` has
+    //    B's sign, else the far one, `(B ± √disc) / A`. Both forms add quantities of one sign.
+    //    Starting from the tangent plane itself would be the same root but not the same
+    //    numbers: a ray running nearly parallel to it (`dz` small: between the steep faces of
+    //    a meniscus, a ghost's rays travel almost across the axis) crosses it hundreds of mm
+    //    away, and the hit, found back from there, loses its digits in the cancellation of two
+    //    long, nearly opposite distances (f32 rays landing up to 0.6 mm from f64's, or missing
+    //    a surface f64 meets).
+    let b_vertex = b - a * t0;
     let den = b + sq.copysign(b);
-    let t1 = q / den;
-    let mut hx = x + t1 * dx;
-    let mut hy = y + t1 * dy;
-    let mut hz = t1 * dz;
+    let near = one.copysign(b_vertex) == one.copysign(b);
+    let t = if near { cc / den } else { den / a };
+    let mut hx = px + t * dx;
+    let mut hy = py + t * dy;
+    // On a plane (c = 0) the hit is on it by definition.
+    let mut hz = if c == zero { zero } else { pz + t * dz };
     // Non-short-circuit `|` keeps the lane code branch-free.
-    let mut missed = !(disc >= zero) | !t1.is_finite() | !t0.is_finite();
+    let mut missed = !(disc >= zero) | !t.is_finite() | !t0.is_finite();
     let mut no_convergence = false;
-    // 3. Surface normal (unnormalised), pointing to +z at the vertex.
-    let (mut nx, mut ny, mut nz) = (-c * hx, -c * hy, one - c * (one + k) * hz);
+    // 4. Surface normal (unnormalised), pointing to +z at the vertex.
+    let (mut nx, mut ny, mut nz) = (-c * hx, -c * hy, one - ck * hz);
     if SHAPE == ASPHERE {
         // Start from the conic hit, or from the tangent plane when the conic was missed.
         let start = if missed { [x, y, zero] } else { [hx, hy, hz] };
@@ -131,7 +153,7 @@ pub(crate) fn advance<T: Real, const MODE: u8, const SHAPE: u8>(
     };
     let dn = dx * nx + dy * ny + dz * nz;
     let cos_i = dn.abs();
-    // 4. Interaction.
+    // 5. Interaction.
     let mut tir = false;
     match MODE {
         REFRACT => {
