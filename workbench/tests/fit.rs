@@ -36,7 +36,7 @@ fn a_rendered_flare_is_fitted_back() {
         "--light",
         "12,30,40",
         "--fit-width",
-        "120",
+        "60",
         "--passes",
         "1",
         "--spread-starts",

@@ -56,40 +56,48 @@ fn the_digital_preset_is_an_ir_cut_filter_a_cover_glass_and_a_sensor_of_a_few_pe
     assert_eq!(none.apply(with).unwrap(), bare);
 }
 
-/// The stack's ghosts on the Heliar with `digital` at 3° (at 8° the light the sensor and the
-/// plates send back misses the rear element: the exit pupil lies 92 mm in front of the sensor):
-/// sensor ↔ lens (13-6), sensor ↔ plate (13-9, 13-12) and plate ↔ plate (12-11, 11-9, 10-9),
-/// and the lens's brightest (3-1) beside them, their energy shares as the plan bounds them and
-/// their images' energies as the mesh reference draws them, against the independent
-/// Monte-Carlo tracer.
-#[test]
-fn the_stack_s_ghosts_agree_with_the_monte_carlo_reference_on_the_heliar() {
+/// The Monte-Carlo settings and the error bars the estimates must reach.
+struct McCheck {
+    rays: usize,
+    batches: usize,
+    /// Largest relative standard error of a ghost's share of the direct light.
+    share_error: f64,
+    /// Largest relative standard error of a ghost's image energy.
+    energy_error: f64,
+}
+
+/// Checks the stack's ghosts `ghosts` on the Heliar with `digital` at 3° (at 8° the light the
+/// sensor and the plates send back misses the rear element: the exit pupil lies 92 mm in front
+/// of the sensor): their energy shares as the plan bounds them and their images' energies as
+/// the mesh reference draws them, against the independent Monte-Carlo tracer, within
+/// `SIGMAS` of its standard error plus `STACK_ENERGY_TOLERANCE`.
+fn check_stack_ghosts_against_monte_carlo(ghosts: &[&str], mc: &McCheck) -> Vec<(String, f64)> {
     let sys = heliar_digital();
     let frame = Frame::across_film(64, 36, sys.film_width_mm);
     let light = LightSpec::parse("3,60").expect("a light");
     let opts = CrosscheckOptions {
         mc: McSettings {
-            rays: 100_000,
-            batches: 16,
+            rays: mc.rays,
+            batches: mc.batches,
             seed: 7,
             pilot: 129,
             outside_weight: 1.0,
         },
         quality: Quality::Default,
         reference: true,
-        ghosts: ["13-6", "13-9", "13-12", "12-11", "11-9", "10-9", "3-1"]
+        ghosts: ghosts
             .iter()
             .map(|s| s.parse().expect("a ghost name"))
             .collect(),
         allot: Allot::Even,
     };
     let c = crosscheck(&sys, &Aperture::Circular, frame, &light, &opts).expect("a crosscheck");
-    assert_eq!(c.ghosts.len(), 7);
+    assert_eq!(c.ghosts.len(), ghosts.len());
     for g in &c.ghosts {
         let s = g.mc_share;
         let b = g.bounds_share.expect("each has light");
         assert!(
-            s.mean > 0.0 && s.relative_error() < 5e-3,
+            s.mean > 0.0 && s.relative_error() < mc.share_error,
             "{}: {s:?}",
             g.path
         );
@@ -98,20 +106,56 @@ fn the_stack_s_ghosts_agree_with_the_monte_carlo_reference_on_the_heliar() {
             "{}: bounds share {b:e} against Monte-Carlo {s:?}",
             g.path
         );
-        let mc = g.mc_energy;
+        let e = g.mc_energy;
         let r = g.reference.expect("the mesh reference drew it");
-        assert!(mc.relative_error() < 0.01, "{}: {mc:?}", g.path);
+        assert!(e.relative_error() < mc.energy_error, "{}: {e:?}", g.path);
         assert!(
-            (r.energy - mc.mean).abs() <= SIGMAS * mc.std_error + STACK_ENERGY_TOLERANCE * mc.mean,
-            "{}: mesh reference {} against Monte-Carlo {mc:?}",
+            (r.energy - e.mean).abs() <= SIGMAS * e.std_error + STACK_ENERGY_TOLERANCE * e.mean,
+            "{}: mesh reference {} against Monte-Carlo {e:?}",
             g.path,
             r.energy
         );
     }
+    c.ghosts
+        .iter()
+        .map(|g| (g.path.clone(), g.mc_share.mean))
+        .collect()
+}
+
+/// Every kind of the stack's ghosts — sensor ↔ lens (13-6), sensor ↔ plate (13-9, 13-12),
+/// plate ↔ plate (12-11, 11-9, 10-9) — and the lens's brightest (3-1) beside them, with
+/// error bars of 0.5% and 1%.
+#[test]
+#[ignore = "slow tier: seven ghosts' Monte-Carlo estimates to 0.5%, about a minute; by default \
+            two of them to 2%"]
+fn the_stack_s_ghosts_agree_with_the_monte_carlo_reference_on_the_heliar() {
+    let shares = check_stack_ghosts_against_monte_carlo(
+        &["13-6", "13-9", "13-12", "12-11", "11-9", "10-9", "3-1"],
+        &McCheck {
+            rays: 100_000,
+            batches: 16,
+            share_error: 5e-3,
+            energy_error: 1e-2,
+        },
+    );
     // The sensor ↔ cover glass ghost 13-12 carries more light than the brightest of the
     // Heliar's own at this angle, 3-1 (5.1e-4 and 4.6e-4 of the direct light).
-    let share = |p: &str| c.ghosts.iter().find(|g| g.path == p).unwrap().mc_share.mean;
+    let share = |p: &str| shares.iter().find(|(g, _)| g == p).unwrap().1;
     assert!(share("13-12") > share("3-1"), "{}", share("13-12"));
+}
+
+/// The sensor ↔ lens ghost and the sensor ↔ cover glass one, on a sixteenth of the rays.
+#[test]
+fn the_sensor_s_ghosts_agree_with_a_short_monte_carlo_run_on_the_heliar() {
+    check_stack_ghosts_against_monte_carlo(
+        &["13-6", "13-12"],
+        &McCheck {
+            rays: 25_000,
+            batches: 4,
+            share_error: 2e-2,
+            energy_error: 4e-2,
+        },
+    );
 }
 
 fn render_args<'a>(lens: &'a str, out: &'a str, extra: &[&'a str]) -> Vec<&'a str> {

@@ -115,7 +115,7 @@ impl Chooser {
         let reference_peaks = angles
             .iter()
             .map(|a| {
-                ghost_figures(&a.basis, &a.reweighter.colours(&start))
+                ghost_figures(&a.basis, &a.reweighter.colours(&start), true)
                     .iter()
                     .map(|g| g.2)
                     .fold(0.0, f64::max)
@@ -142,11 +142,19 @@ impl Chooser {
 
     /// The flare under `designs`.
     pub fn evaluate(&self, designs: &[Design]) -> Evaluation {
+        self.evaluate_with(designs, true)
+    }
+
+    /// The flare under `designs`, its ghosts' peaks measured only when `peaks` is set or the
+    /// objective needs them (each costs a pass over the ghost's band images; the search's
+    /// trials of the total and brightest objectives do without).
+    fn evaluate_with(&self, designs: &[Design], peaks: bool) -> Evaluation {
+        let peaks = peaks || matches!(self.objective, Objective::Visible(_));
         let sys = self.lens(designs);
         let per_angle: Vec<Vec<(String, f64, f64)>> = self
             .angles
             .iter()
-            .map(|a| ghost_figures(&a.basis, &a.reweighter.colours(&sys)))
+            .map(|a| ghost_figures(&a.basis, &a.reweighter.colours(&sys), peaks))
             .collect();
         let paths: Vec<String> = per_angle
             .iter()
@@ -238,7 +246,7 @@ impl Chooser {
                     .map(|&d| {
                         let mut trial = designs.clone();
                         trial[s] = d;
-                        (d, self.evaluate(&trial).objective)
+                        (d, self.evaluate_with(&trial, false).objective)
                     })
                     .collect();
                 evaluations += tried.len();
@@ -280,9 +288,9 @@ pub fn assign(system: &LensSystem, surfaces: &[Coatable], designs: &[Design]) ->
     sys
 }
 
-/// Per ghost of `basis` under `colours`: its path, energy (luminance on the frame) and peak
-/// (luminance of its brightest pixel).
-fn ghost_figures(basis: &Basis, colours: &[[f64; 3]]) -> Vec<(String, f64, f64)> {
+/// Per ghost of `basis` under `colours`: its path, energy (luminance on the frame) and, when
+/// `peaks` is set, peak (luminance of its brightest pixel; 0 otherwise).
+fn ghost_figures(basis: &Basis, colours: &[[f64; 3]], peaks: bool) -> Vec<(String, f64, f64)> {
     let mut c = colours.iter();
     basis
         .ghosts
@@ -294,6 +302,9 @@ fn ghost_figures(basis: &Basis, colours: &[[f64; 3]]) -> Vec<(String, f64, f64)>
                 .map(|_| luminance(*c.next().expect("one colour per band image")))
                 .collect();
             let energy = g.bands.iter().zip(&lum).map(|(b, l)| b.sum * l).sum();
+            if !peaks {
+                return (g.path.to_string(), energy, 0.0);
+            }
             // The peak of the ghost's own image: its bands summed over their boxes.
             let x0 = g.bands.iter().map(|b| b.x0).min().unwrap_or(0);
             let y0 = g.bands.iter().map(|b| b.y0).min().unwrap_or(0);

@@ -18,11 +18,11 @@ use flarebench_sdk::raster::Coverage;
 use flarebench_test_support::{load_lens, plugin_library};
 use ghost_raytrace::scene::LightSpec;
 
-/// The frame: an eighth of the ghosts' parity frame across. The plugin's triangles are large
-/// and all exactly covered, each drawn over its bounding box, so lavapipe's time grows with
-/// the frame's area: 960 × 540 took 400 s (docs/gpu.md), 480 × 270 60 s, this about 15 s.
-const WIDTH: usize = 240;
-const HEIGHT: usize = 135;
+/// The frame: a sixteenth of the ghosts' parity frame across. The plugin's triangles are
+/// large and all exactly covered, each drawn over its bounding box, so lavapipe's time grows
+/// with the frame's area: 960 × 540 took 400 s (docs/gpu.md), 480 × 270 60 s, 240 × 135 15 s.
+const WIDTH: usize = 120;
+const HEIGHT: usize = 68;
 
 /// Relative RMSE of the GPU image against the CPU image (as the ghosts' parity).
 const MAX_RMSE: f64 = 0.005;
