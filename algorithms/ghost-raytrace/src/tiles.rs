@@ -4,7 +4,8 @@
 //! per ghost.
 //!
 //! Each ghost is drawn as [`ghosts::render_into`](crate::ghosts::render_into) draws it (its
-//! light's plan holding it alone), into a black frame-sized buffer kept per thread. Its
+//! light's plan holding it alone), into a black frame-sized buffer from a pool
+//! ([`TileBuffers`]). Its
 //! window is found from the triangles it was drawn with ([`GhostWindow`]): each level's mesh
 //! bounds, in full-resolution pixels, widened by the bilinear upsampling's reach (1.5 coarse
 //! pixels) and a pixel of rasterizer coverage, clipped to the frame. The window is copied out
@@ -13,6 +14,8 @@
 //!
 //! Summing the tiles gives the frame's image up to the order of the f32 additions (a coarse
 //! ghost is upsampled alone, not with its level's other ghosts).
+
+use std::sync::{Mutex, PoisonError};
 
 use flarebench_sdk::LensSystem;
 use flarebench_sdk::aperture::Aperture;
@@ -53,18 +56,62 @@ impl GhostTile {
     }
 }
 
+/// Frame-sized buffers (and their coarse frames) the ghosts are drawn into, kept for the next
+/// ghost and the next call: a buffer is black between ghosts (its window is cleared as it is
+/// copied out), so any ghost may take any buffer. Allocating one per ghost (or per rayon job)
+/// faulted a fresh 25 MB in at 1920 × 1080 each time: the system time doubled a sample's.
+/// Holds as many as ghosts were ever drawn at once; a buffer of another frame size is
+/// dropped when met.
+#[derive(Debug, Default)]
+pub struct TileBuffers {
+    free: Mutex<Vec<(HdrImage, RenderScratch)>>,
+}
+
+impl TileBuffers {
+    /// No buffers yet.
+    pub const fn new() -> TileBuffers {
+        TileBuffers {
+            free: Mutex::new(Vec::new()),
+        }
+    }
+
+    /// A black buffer of `frame`'s size: a kept one, or a new one.
+    fn take(&self, frame: Frame) -> (HdrImage, RenderScratch) {
+        let mut free = self.free.lock().unwrap_or_else(PoisonError::into_inner);
+        while let Some((img, scratch)) = free.pop() {
+            if (img.width, img.height) == (frame.width, frame.height) {
+                return (img, scratch);
+            }
+        }
+        drop(free);
+        (
+            HdrImage::new(frame.width, frame.height),
+            RenderScratch::default(),
+        )
+    }
+
+    /// Gives a black buffer back.
+    fn give(&self, buffer: (HdrImage, RenderScratch)) {
+        self.free
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .push(buffer);
+    }
+}
+
 /// Full-resolution pixels of rasterizer reach added on each side of a mesh's bounds: a
 /// triangle with exact coverage lights the pixels its corners fall in.
 const COVERAGE_MARGIN_PX: f64 = 1.0;
 
-/// Draws every planned ghost of `plans` alone; returns the tiles in plan order (light by
-/// light, each light's ghosts in order).
+/// Draws every planned ghost of `plans` alone, into buffers taken from `buffers`; returns
+/// the tiles in plan order (light by light, each light's ghosts in order).
 pub fn render_ghost_tiles(
     system: &LensSystem,
     aperture: &Aperture,
     frame: Frame,
     plans: &[LightPlan],
     options: RenderOptions,
+    buffers: &TileBuffers,
 ) -> Result<Vec<GhostTile>, GhostRenderError> {
     let options = RenderOptions {
         replace: false,
@@ -88,45 +135,69 @@ pub fn render_ghost_tiles(
         .flat_map(|(li, p)| (0..p.ghosts.len()).map(move |gi| (li, gi)))
         .collect();
     jobs.par_iter()
-        .map_init(
-            || {
-                (
-                    HdrImage::new(frame.width, frame.height),
-                    RenderScratch::default(),
-                )
-            },
-            |(buffer, scratch), &(light, ghost)| {
-                let mut plan = empty[light].clone();
-                plan.ghosts.push(plans[light].ghosts[ghost].clone());
-                let mut targets =
-                    Targets::new(scratch, aperture, &mut buffer.pixels, frame.width, false);
-                let mut sink = GhostWindow {
-                    targets: &mut targets,
-                    grids: Vec::new(),
-                    bounds: None,
-                };
-                let stats = draw_into(
-                    system,
-                    aperture,
-                    frame,
-                    std::slice::from_ref(&plan),
-                    options,
-                    &mut sink,
-                )?;
-                let window = sink.window(frame);
-                targets.keep(frame);
-                let image = take_window(buffer, window);
-                Ok(GhostTile {
-                    light,
-                    ghost,
-                    x0: window[0],
-                    y0: window[1],
-                    image,
-                    stats: stats[0].first().copied().unwrap_or_default(),
-                })
-            },
-        )
+        .map(|&(light, ghost)| {
+            let (mut buffer, mut scratch) = buffers.take(frame);
+            let tile = render_alone(
+                system,
+                aperture,
+                frame,
+                &empty[light],
+                plans,
+                (light, ghost),
+                options,
+                (&mut buffer, &mut scratch),
+            );
+            // Black again whether or not the ghost was drawn: its window was cleared, and a
+            // failed ghost draws nothing (the error comes before its meshes).
+            buffers.give((buffer, scratch));
+            tile
+        })
         .collect()
+}
+
+/// Draws ghost `ghost` of light `light` alone into `buffer` (black), with its light's plan
+/// emptied of ghosts `empty`; copies its window out and leaves `buffer` black.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the draw's inputs and the buffers it is drawn into"
+)]
+fn render_alone(
+    system: &LensSystem,
+    aperture: &Aperture,
+    frame: Frame,
+    empty: &LightPlan,
+    plans: &[LightPlan],
+    (light, ghost): (usize, usize),
+    options: RenderOptions,
+    (buffer, scratch): (&mut HdrImage, &mut RenderScratch),
+) -> Result<GhostTile, GhostRenderError> {
+    let mut plan = empty.clone();
+    plan.ghosts.push(plans[light].ghosts[ghost].clone());
+    let mut targets = Targets::new(scratch, aperture, &mut buffer.pixels, frame.width, false);
+    let mut sink = GhostWindow {
+        targets: &mut targets,
+        grids: Vec::new(),
+        bounds: None,
+    };
+    let stats = draw_into(
+        system,
+        aperture,
+        frame,
+        std::slice::from_ref(&plan),
+        options,
+        &mut sink,
+    )?;
+    let window = sink.window(frame);
+    targets.keep(frame);
+    let image = take_window(buffer, window);
+    Ok(GhostTile {
+        light,
+        ghost,
+        x0: window[0],
+        y0: window[1],
+        image,
+        stats: stats[0].first().copied().unwrap_or_default(),
+    })
 }
 
 /// The pixels of `window` (`[x0, y0, x1, y1]`) copied out of `buffer`, and made black there.

@@ -25,7 +25,7 @@ use flarebench_sdk::starburst::{StarburstSettings, chief_ray_landing};
 use ghost_raytrace::ghosts::RenderOptions;
 use ghost_raytrace::plan::{self, PlanOptions};
 use ghost_raytrace::scene::LightSpec;
-use ghost_raytrace::tiles::{GhostTile, render_ghost_tiles};
+use ghost_raytrace::tiles::{GhostTile, TileBuffers, render_ghost_tiles};
 
 use super::annotation::{
     Annotation, GhostAnnotation, GhostMeasure, LensFigures, LightAnnotation, RenderFigures,
@@ -36,6 +36,10 @@ use crate::aperture_file::{MaskEncoding, load_aperture_mask};
 use crate::flare::compose::add_starbursts;
 use crate::flare::exposure::{auto_exposure, ghost_exposure};
 use crate::flare::{BackendChoice, Flare, Preset, Scene, StarburstMode, frame_for};
+
+/// The frame-sized buffers ghosts are drawn into, kept from sample to sample (at most one per
+/// ghost drawn at once, of the last frame size met).
+static TILE_BUFFERS: TileBuffers = TileBuffers::new();
 
 /// The annotation file's format name.
 pub const ANNOTATION_FORMAT: &str = "flarebench-dataset-sample-1";
@@ -197,8 +201,15 @@ pub fn render_sample(spec: &SampleSpec) -> anyhow::Result<SampleOutput> {
     };
 
     // Every ghost drawn once, alone, into the window it lights; the layers are their sums.
-    let tiles = render_ghost_tiles(sys, aperture, frame, &plans, RenderOptions::default())
-        .with_context(|| format!("sample {}", spec.index))?;
+    let tiles = render_ghost_tiles(
+        sys,
+        aperture,
+        frame,
+        &plans,
+        RenderOptions::default(),
+        &TILE_BUFFERS,
+    )
+    .with_context(|| format!("sample {}", spec.index))?;
     let all: Vec<&GhostTile> = tiles.iter().collect();
     let mut ghosts_img = HdrImage::new(frame.width, frame.height);
     add_tiles(&mut ghosts_img, &all);
