@@ -26,6 +26,7 @@ use ghost_raytrace::ghosts::RenderOptions;
 use ghost_raytrace::plan::{self, PlanOptions};
 use ghost_raytrace::scene::LightSpec;
 use ghost_raytrace::tiles::{GhostTile, TileBuffers, render_ghost_tiles};
+use rayon::prelude::*;
 
 use super::annotation::{
     Annotation, GhostAnnotation, GhostMeasure, LensFigures, LightAnnotation, RenderFigures,
@@ -273,8 +274,9 @@ pub fn render_sample(spec: &SampleSpec) -> anyhow::Result<SampleOutput> {
     // The automatic exposure as `Flare::render` finds it: the ghosts', else the flare's.
     let exposure_ev = ghost_exposure(&ghosts_img).unwrap_or_else(|| auto_exposure(&flare_img));
 
+    // Each ghost's measure on its own (in parallel; each is the same bits on any thread).
     let ghost_notes: Vec<GhostAnnotation> = tiles
-        .iter()
+        .par_iter()
         .enumerate()
         .map(|(k, t)| GhostAnnotation {
             id: k as u32 + 1,
