@@ -1,6 +1,7 @@
-//! Numbered frame sequences (`render --frames A..B --light-path FILE -o out.####.exr`): the
-//! frame range, the share of it one process renders (`--shard I/N`), and the output pattern
-//! whose `####` (or printf-style `%04d`) becomes the frame number.
+//! Numbered frame sequences (`render --frames A..B --light-path FILE -o out.####.exr`,
+//! `apply plate.####.exr --frames A..B -o out.####.exr`): the frame range, the share of it
+//! one process renders (`--shard I/N`), and the file pattern whose `####` (or printf-style
+//! `%04d`) becomes the frame number.
 
 use std::path::{Path, PathBuf};
 
@@ -88,11 +89,17 @@ pub struct FramePattern {
 }
 
 impl FramePattern {
-    /// Finds the placeholder in `path`'s file name.
+    /// Finds the placeholder in the output path `path`'s file name.
     pub fn parse(path: &Path) -> anyhow::Result<FramePattern> {
+        FramePattern::parse_as(path, "output")
+    }
+
+    /// Finds the placeholder in `path`'s file name; errors call the path `what` (`output`,
+    /// `image`).
+    pub fn parse_as(path: &Path, what: &str) -> anyhow::Result<FramePattern> {
         let s = path
             .to_str()
-            .ok_or_else(|| anyhow::anyhow!("the output `{}` is not UTF-8", path.display()))?;
+            .ok_or_else(|| anyhow::anyhow!("the {what} `{}` is not UTF-8", path.display()))?;
         let name_at = s.rfind('/').map_or(0, |i| i + 1);
         let name = &s[name_at..];
         let hashes = name.find('#').map(|i| {
@@ -110,17 +117,17 @@ impl FramePattern {
             (Some(h), None) => h,
             (None, Some(p)) => p,
             (Some(_), Some(_)) => {
-                bail!("the output `{s}` has both `#` and `%d`: give one frame-number placeholder")
+                bail!("the {what} `{s}` has both `#` and `%d`: give one frame-number placeholder")
             }
             (None, None) => bail!(
-                "the output `{s}` has no frame number: with --frames give a pattern such as \
-                 `out.####.exr` or `out.%04d.exr`"
+                "the {what} `{s}` has no frame number: with --frames give a pattern such as \
+                 `name.####.exr` or `name.%04d.exr`"
             ),
         };
         let suffix = &name[at + len..];
         ensure!(
             !suffix.contains('#') && !suffix.contains('%'),
-            "the output `{s}` has more than one frame-number placeholder"
+            "the {what} `{s}` has more than one frame-number placeholder"
         );
         Ok(FramePattern {
             prefix: format!("{}{}", &s[..name_at], &name[..at]),

@@ -1,6 +1,6 @@
 //! End-to-end tests of `flarebench dataset`: samples the same bytes whether rendered by one
-//! process, by shards in parallel processes or with any thread count; a killed or damaged
-//! run resumed; `dataset verify` catching a missing and a corrupted file; annotations that
+//! process, by shards in parallel processes, as a range or with any thread count; a killed
+//! or damaged run resumed; the layers the ordinary render of the scene; `dataset verify` catching a missing and a corrupted file; annotations that
 //! match the images; the sampler's ranges; bad sampler files refused with their position.
 
 use crate::common;
@@ -12,6 +12,7 @@ use std::time::{Duration, Instant};
 
 use common::{command, flarebench, temp_dir};
 use flarebench::dataset::layers::{layer_image, read_channels};
+use flarebench::dataset::sample::render_whole;
 use flarebench::dataset::{Sampler, render_sample};
 use flarebench_sdk::color::srgb::luminance;
 use serde_json::Value;
@@ -26,6 +27,13 @@ const GHOST_SUM_REL_TOL: f64 = 1e-4;
 /// The flare against its ghosts' and starbursts' layers added, per pixel (relative to the
 /// flare's largest value): f32 additions of several lights' starbursts in another order.
 const LAYER_SUM_REL_TOL: f32 = 1e-5;
+
+/// The flare and ghost layers (each ghost drawn alone, the windows summed) against
+/// `Flare::render` of the same scene (all ghosts at once): relative RMSE and energy error.
+/// The same triangles, the f32 additions in another order (a coarse ghost upsampled alone,
+/// not with its level); measured at most 1.3e-7 (ghosts) and 3.4e-12 (flare) on the samples of
+/// `the_layers_are_the_ordinary_render_of_the_scene`.
+const WHOLE_REL_TOL: f64 = 1e-6;
 
 /// A tiny, fast sampler: two lenses, 64×48, per-light layers.
 const TINY: &str = r#"
@@ -94,28 +102,24 @@ fn assert_same(a: &BTreeMap<String, Vec<u8>>, b: &BTreeMap<String, Vec<u8>>) {
 }
 
 #[test]
-fn shards_in_parallel_processes_and_thread_counts_give_the_same_bytes() {
+fn shards_in_parallel_processes_thread_counts_and_ranges_give_the_same_bytes() {
     let tmp = temp_dir("dataset-shards");
     let config = write(tmp.path(), "tiny.toml", TINY);
     let one = tmp.path().join("one");
-    dataset(&config, &one, "6", &["--threads", "1"]);
+    dataset(&config, &one, "4", &["--threads", "1"]);
     let reference = files(&one);
-    // 6 samples × (EXR, PNG, JSON) and the two top files.
-    assert_eq!(reference.len(), 6 * 3 + 2);
+    // 4 samples × (EXR, PNG, JSON) and the two top files.
+    assert_eq!(reference.len(), 4 * 3 + 2);
 
-    let two = tmp.path().join("two");
-    dataset(&config, &two, "6", &["--threads", "2"]);
-    assert_same(&reference, &files(&two));
-
-    // Three shards at once, writing into one directory.
+    // Two shards at once, writing into one directory, on two threads each.
     let sharded = tmp.path().join("sharded");
-    let children: Vec<_> = (0..3)
+    let children: Vec<_> = (0..2)
         .map(|i| {
             command()
                 .args([
                     "dataset",
                     "--count",
-                    "6",
+                    "4",
                     "--seed",
                     "11",
                     "--config",
@@ -123,9 +127,9 @@ fn shards_in_parallel_processes_and_thread_counts_give_the_same_bytes() {
                     "-o",
                     sharded.to_str().unwrap(),
                     "--shard",
-                    &format!("{i}/3"),
+                    &format!("{i}/2"),
                     "--threads",
-                    "1",
+                    "2",
                 ])
                 .stdout(Stdio::piped())
                 .stderr(Stdio::piped())
@@ -142,24 +146,18 @@ fn shards_in_parallel_processes_and_thread_counts_give_the_same_bytes() {
     let o = flarebench(&["dataset", "merge", sharded.to_str().unwrap()]);
     assert!(o.status.success());
     assert_same(&reference, &files(&sharded));
-}
 
-#[test]
-fn a_range_renders_only_its_samples_and_the_same_bytes() {
-    let tmp = temp_dir("dataset-range");
-    let config = write(tmp.path(), "tiny.toml", TINY);
-    let all = tmp.path().join("all");
-    dataset(&config, &all, "4", &[]);
+    // A range renders only its samples, the same bytes.
     let part = tmp.path().join("part");
-    let line = dataset(&config, &part, "4", &["--range", "2..3"]);
-    assert!(line.contains("samples 2..3: 2 rendered"), "{line}");
-    let all = files(&all);
+    let line = dataset(&config, &part, "4", &["--range", "2..2"]);
+    assert!(line.contains("samples 2..2: 1 rendered"), "{line}");
     let part = files(&part);
-    for name in ["00000002.exr", "00000003.json", "00000003.png"] {
+    for name in ["00000002.exr", "00000002.json", "00000002.png"] {
         let k = format!("samples/{name}");
-        assert!(all[&k] == part[&k], "{k}");
+        assert!(reference[&k] == part[&k], "{k}");
     }
     assert!(!part.contains_key("samples/00000000.exr"));
+    assert!(!part.contains_key("samples/00000003.exr"));
     let o = flarebench(&["dataset", "--count", "4", "--range", "2..4", "-o", "x"]);
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("beyond the dataset's 4 samples"));
@@ -170,12 +168,12 @@ fn verify_lists_a_missing_and_a_corrupted_file_and_a_rerun_redoes_only_those() {
     let tmp = temp_dir("dataset-verify");
     let config = write(tmp.path(), "tiny.toml", TINY);
     let dir = tmp.path().join("d");
-    dataset(&config, &dir, "4", &[]);
+    dataset(&config, &dir, "3", &[]);
     let before = files(&dir);
     let d = dir.to_str().unwrap();
     let o = flarebench(&["dataset", "verify", d]);
     assert!(o.status.success());
-    assert!(String::from_utf8_lossy(&o.stdout).contains("4 samples, every file matches"));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("3 samples, every file matches"));
 
     std::fs::remove_file(dir.join("samples/00000001.exr")).unwrap();
     let png = dir.join("samples/00000002.png");
@@ -199,8 +197,8 @@ fn verify_lists_a_missing_and_a_corrupted_file_and_a_rerun_redoes_only_those() {
     );
     assert!(String::from_utf8_lossy(&o.stderr).contains("2 bad files"));
 
-    let line = dataset(&config, &dir, "4", &[]);
-    assert!(line.contains("2 rendered, 2 done already"), "{line}");
+    let line = dataset(&config, &dir, "3", &[]);
+    assert!(line.contains("2 rendered, 1 done already"), "{line}");
     assert_same(&before, &files(&dir));
     assert!(flarebench(&["dataset", "verify", d]).status.success());
 
@@ -209,14 +207,14 @@ fn verify_lists_a_missing_and_a_corrupted_file_and_a_rerun_redoes_only_those() {
     let text = std::fs::read_to_string(&manifest).unwrap();
     let kept: Vec<&str> = text
         .lines()
-        .filter(|l| !l.starts_with("{\"index\":3,"))
+        .filter(|l| !l.starts_with("{\"index\":2,"))
         .collect();
     std::fs::write(&manifest, kept.join("\n") + "\n").unwrap();
     let o = flarebench(&["dataset", "verify", d]);
     assert_eq!(o.status.code(), Some(1));
     assert_eq!(
         String::from_utf8_lossy(&o.stdout).trim(),
-        "missing: sample 3"
+        "missing: sample 2"
     );
 }
 
@@ -225,14 +223,14 @@ fn a_killed_run_resumes_to_the_same_bytes() {
     let tmp = temp_dir("dataset-kill");
     let config = write(tmp.path(), "tiny.toml", TINY);
     let reference = tmp.path().join("reference");
-    dataset(&config, &reference, "16", &["--threads", "2"]);
+    dataset(&config, &reference, "6", &["--threads", "2"]);
 
     let dir = tmp.path().join("killed");
     let mut child = command()
         .args([
             "dataset",
             "--count",
-            "16",
+            "6",
             "--seed",
             "11",
             "--config",
@@ -261,14 +259,14 @@ fn a_killed_run_resumes_to_the_same_bytes() {
     let done = std::fs::read_dir(&records).unwrap().count();
     assert!(done >= 2);
 
-    let line = dataset(&config, &dir, "16", &["--threads", "2"]);
+    let line = dataset(&config, &dir, "6", &["--threads", "2"]);
     let rendered: usize = line
         .split(": ")
         .nth(2)
         .and_then(|s| s.split(' ').next())
         .and_then(|n| n.parse().ok())
         .unwrap_or_else(|| panic!("{line}"));
-    assert!(rendered <= 16 - 2, "{line}");
+    assert!(rendered <= 6 - 2, "{line}");
     // Temporary files a kill left behind are not part of the dataset.
     let mut resumed = files(&dir);
     resumed.retain(|k, _| !k.ends_with(".tmp"));
@@ -396,6 +394,36 @@ fn the_library_renders_what_the_command_writes() {
         written,
         serde_json::to_string_pretty(&out.annotation).unwrap() + "\n"
     );
+}
+
+#[test]
+fn the_layers_are_the_ordinary_render_of_the_scene() {
+    // Two lights, and a frame large enough for coarse levels and full-resolution ghosts.
+    let text = r#"
+size = [160, 120]
+starburst_texels = 64
+[lenses]
+names = ["heliar-tronnier"]
+[lights]
+count = [2, 2]
+"#;
+    let sampler = Sampler::from_toml_str(text, "whole", Path::new(".")).unwrap();
+    for index in 0..2 {
+        let spec = sampler.sample(3, index).unwrap();
+        let out = render_sample(&spec).unwrap();
+        let (flare, ghosts) = render_whole(&spec).unwrap();
+        assert!(ghosts.max() > 0.0, "sample {index} draws ghosts");
+        for (name, layer, whole) in [
+            ("ghosts", &out.ghosts, &ghosts),
+            ("flare", &out.flare, &flare),
+        ] {
+            let rmse = layer.relative_rmse(whole).unwrap();
+            let energy = layer.energy_error(whole).unwrap().abs();
+            eprintln!("sample {index} {name}: rmse {rmse:e}, energy {energy:e}");
+            assert!(rmse <= WHOLE_REL_TOL, "sample {index} {name}: {rmse}");
+            assert!(energy <= WHOLE_REL_TOL, "sample {index} {name}: {energy}");
+        }
+    }
 }
 
 #[test]

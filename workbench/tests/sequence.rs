@@ -1,12 +1,16 @@
 //! End-to-end tests of `flarebench render --frames A..B --light-path FILE`: numbered frames,
 //! lights where their paths put them, keyframes met by both interpolations, shards equal to
-//! the full run bit for bit, one exposure for PNG frames, bad path files refused.
+//! the full run bit for bit, one exposure for PNG frames, bad path files refused; and `apply`
+//! over a numbered image sequence: the same bytes as `apply` frame by frame with the
+//! sequence's exposure and table, shards equal to the full run, a missing plate named.
 
 use crate::common;
 
 use std::path::Path;
 
 use common::{flarebench, json, temp_dir};
+use flarebench::output::{ToneMap, save_image};
+use flarebench_sdk::image::HdrImage;
 use serde_json::Value;
 
 /// Where a keyframe's chief ray lands in a sequence against `render --light` of the same
@@ -364,4 +368,148 @@ fn a_precomputed_table_serves_every_frame() {
     assert_eq!(o.status.code(), Some(1));
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(e.contains("frame 2") && !e.contains("panicked"), "{e}");
+}
+
+/// Plates `plate.0001.exr` … of a 64×48 sequence in `dir`: a dim background and a 2×2 light
+/// of 2000 per pixel moving 6 px right per frame.
+fn plates(dir: &Path, frames: std::ops::RangeInclusive<u64>) {
+    let (w, h) = (64, 48);
+    for f in frames {
+        let mut img = HdrImage::from_pixels(w, h, vec![[0.1, 0.12, 0.15]; w * h]).unwrap();
+        let x = 20 + 6 * f as usize;
+        for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+            img.pixels[(18 + dy) * w + x + dx] = [2000.0, 1900.0, 1700.0];
+        }
+        save_image(
+            &img,
+            &dir.join(format!("plate.{f:04}.exr")),
+            &ToneMap::default(),
+        )
+        .unwrap();
+    }
+}
+
+/// `apply` over plates in `dir` with `extra` arguments, `--json`.
+fn apply_frames(dir: &Path, frames: &str, output: &str, extra: &[&str]) -> Value {
+    let plate = dir.join("plate.####.exr");
+    let out = dir.join(output);
+    let mut args = vec![
+        "apply",
+        plate.to_str().unwrap(),
+        "--lens",
+        "heliar-tronnier",
+        "--frames",
+        frames,
+        "--quality",
+        "fast",
+        "--starburst-texels",
+        "64",
+        "--backend",
+        "cpu",
+        "-o",
+        out.to_str().unwrap(),
+        "--json",
+    ];
+    args.extend_from_slice(extra);
+    json(&args)
+}
+
+#[test]
+fn apply_over_a_sequence_equals_apply_frame_by_frame_with_its_exposure() {
+    let tmp = temp_dir("apply-seq");
+    let dir = tmp.path();
+    plates(dir, 1..=3);
+    // One bounds table for both: paraxial bounds, quick to make.
+    let table = dir.join("bounds.json");
+    let o = flarebench(&[
+        "precompute",
+        "heliar-tronnier",
+        "--mode",
+        "approximate",
+        "-o",
+        table.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let t = table.to_str().unwrap();
+    // PNG frames: one automatic exposure from the brightest plate.
+    let v = apply_frames(dir, "1..3", "seq.####.png", &["--precomputed", t]);
+    assert_eq!(v["frames"].as_array().unwrap().len(), 3, "{v}");
+    assert!(
+        v["frames"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|f| f["lights"] == 1)
+    );
+    assert!(v["exposure_frame"].is_u64(), "{v}");
+    let ev = v["exposure_ev"].as_f64().unwrap().to_string();
+    for f in 1..=3 {
+        let one = dir.join(format!("one.{f:04}.png"));
+        let o = flarebench(&[
+            "apply",
+            dir.join(format!("plate.{f:04}.exr")).to_str().unwrap(),
+            "--lens",
+            "heliar-tronnier",
+            "--quality",
+            "fast",
+            "--starburst-texels",
+            "64",
+            "--backend",
+            "cpu",
+            "--precomputed",
+            t,
+            "--exposure-ev",
+            &ev,
+            "-o",
+            one.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let seq = std::fs::read(dir.join(format!("seq.{f:04}.png"))).unwrap();
+        assert!(seq == std::fs::read(&one).unwrap(), "frame {f} differs");
+    }
+}
+
+#[test]
+fn apply_shards_together_equal_the_full_run_and_a_missing_plate_is_named() {
+    let tmp = temp_dir("apply-shards");
+    let dir = tmp.path();
+    plates(dir, 1..=3);
+    // EXR frames, the bounds table built by each run.
+    let full = apply_frames(dir, "1..3", "full/f.####.exr", &[]);
+    assert_eq!(full["table"], "built", "{full}");
+    for i in 0..2 {
+        apply_frames(
+            dir,
+            "1..3",
+            "shard/f.####.exr",
+            &["--shard", &format!("{i}/2")],
+        );
+    }
+    for f in 1..=3 {
+        let name = format!("f.{f:04}.exr");
+        let a = std::fs::read(dir.join("full").join(&name)).unwrap();
+        let b = std::fs::read(dir.join("shard").join(&name)).unwrap();
+        assert!(a == b, "frame {f} differs");
+    }
+
+    let plate = dir.join("plate.####.exr");
+    let out = dir.join("m.####.exr");
+    let o = flarebench(&[
+        "apply",
+        plate.to_str().unwrap(),
+        "--lens",
+        "heliar-tronnier",
+        "--frames",
+        "2..4",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    let missing = dir.join("plate.0004.exr");
+    assert!(
+        err.contains(&format!("frame 4: no image `{}`", missing.display())),
+        "{err}"
+    );
+    assert!(!dir.join("m.0002.exr").exists(), "nothing is written");
 }

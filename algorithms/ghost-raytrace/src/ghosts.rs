@@ -133,25 +133,9 @@ pub fn render_into_reusing(
             len: out.len(),
         });
     }
-    let mut targets = Targets {
-        scratch,
-        grids: Vec::new(),
-        coarse: Vec::new(),
-        aperture,
-        out,
-        width: frame.width,
-        blend: if options.replace {
-            Blend::Replace
-        } else {
-            Blend::Add
-        },
-        spans: None,
-    };
+    let mut targets = Targets::new(scratch, aperture, out, frame.width, options.replace);
     let stats = draw_into(system, aperture, frame, plans, options, &mut targets)?;
-    // The coarse frames go back to the scratch with the spans their upsampling found.
-    let spans = targets.spans.take().unwrap_or_default();
-    let coarse = std::mem::take(&mut targets.coarse);
-    scratch_keep(targets.scratch, coarse, spans, frame);
+    targets.keep(frame);
     Ok(stats)
 }
 
@@ -368,7 +352,7 @@ const BATCH_TRIANGLES: usize = 1 << 18;
 /// (taken from the scratch); those added to (or replacing) the output in one pass once every
 /// coarse ghost is drawn; the full-resolution level then straight into the output. (The same
 /// order either way, so replacing gives what adding to black does.)
-struct Targets<'a> {
+pub(crate) struct Targets<'a> {
     scratch: &'a mut RenderScratch,
     grids: Vec<CoarseGrid>,
     coarse: Vec<HdrImage>,
@@ -380,7 +364,36 @@ struct Targets<'a> {
     spans: Option<Vec<RowSpans>>,
 }
 
-impl Targets<'_> {
+impl<'a> Targets<'a> {
+    /// Targets drawing into `out` (`width` pixels a row), adding to it or, with `replace`,
+    /// replacing it, with coarse frames taken from `scratch`.
+    pub(crate) fn new(
+        scratch: &'a mut RenderScratch,
+        aperture: &'a Aperture,
+        out: &'a mut [[f32; 3]],
+        width: usize,
+        replace: bool,
+    ) -> Targets<'a> {
+        Targets {
+            scratch,
+            grids: Vec::new(),
+            coarse: Vec::new(),
+            aperture,
+            out,
+            width,
+            blend: if replace { Blend::Replace } else { Blend::Add },
+            spans: None,
+        }
+    }
+
+    /// Once the frame is drawn: the coarse frames go back to the scratch with the spans their
+    /// upsampling found.
+    pub(crate) fn keep(mut self, frame: Frame) {
+        let spans = self.spans.take().unwrap_or_default();
+        let coarse = std::mem::take(&mut self.coarse);
+        scratch_keep(self.scratch, coarse, spans, frame);
+    }
+
     /// The upsampling pass, once.
     fn upsample(&mut self) {
         if self.spans.is_none() {

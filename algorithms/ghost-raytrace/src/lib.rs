@@ -9,6 +9,7 @@
 //! - [`method`]: how each ghost is drawn (meshed or splatted), by a per-ghost cost and error
 //!   model within the preset's error budget.
 //! - [`ghosts`]: carrying out a plan into a linear HDR image.
+//! - [`tiles`]: every planned ghost drawn alone, into the window of the frame it lights.
 //! - [`reference`]: the dense reference renderer behind every error figure.
 //! - [`crosscheck`]: every ghost by the independent Monte-Carlo reference, the mesh reference
 //!   and the renderer, side by side.
@@ -24,5 +25,6 @@ pub mod plan;
 pub mod plugin;
 pub mod reference;
 pub mod scene;
+pub mod tiles;
 
 pub use error::GhostRenderError;

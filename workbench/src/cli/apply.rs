@@ -25,6 +25,7 @@ use flarebench_sdk::color::LightSpectrum;
 use flarebench_sdk::frame::Frame;
 use flarebench_sdk::ghost::GridTrace;
 use flarebench_sdk::ghost::bounds::direct_flux;
+use flarebench_sdk::ghost::table::BoundsTable;
 use flarebench_sdk::image::HdrImage;
 use flarebench_sdk::trace::InterfaceTableSet;
 use ghost_raytrace::plan::PlanOptions;
@@ -33,10 +34,12 @@ use serde::Serialize;
 
 use super::render::{IrisArgs, StarburstArgs};
 use crate::flare::compose::{StarburstLine, add_onto};
-use crate::flare::{BackendChoice, BackendReport, Flare, Preset, Scene};
-use crate::input_image::read_input_image;
+use crate::flare::{BackendChoice, BackendReport, Flare, Preset, Rendered, Scene};
+use crate::input_image::{InputImage, read_input_image};
 use crate::lens_library;
 use crate::output::{ExrPrecision, OutputFormat, ToneMap, ToneOperator, save_image_as};
+use crate::precomputed::load_precomputed;
+use crate::sequence::{FrameRange, Shard};
 use crate::sources::{Source, direction_of, find_sources};
 
 /// How many stops brighter than its pixels a clipped source of an 8-bit image is taken to be
@@ -45,7 +48,8 @@ pub const CLIPPED_SOURCE_STOPS: f64 = 10.0;
 
 #[derive(Debug, Args)]
 pub struct ApplyArgs {
-    /// The image: .exr (linear HDR) or .png/.bmp (sRGB; bright sources are clipped).
+    /// The image: .exr (linear HDR) or .png/.bmp (sRGB; bright sources are clipped). With
+    /// --frames, a pattern whose `####` (or `%04d`) is the frame number (`plate.####.exr`).
     pub image: PathBuf,
     /// Lens file or the name of a bundled lens.
     #[arg(long)]
@@ -91,6 +95,20 @@ pub struct ApplyArgs {
     pub json: bool,
     #[command(flatten)]
     pub sensor_stack: crate::sensor_stack::SensorStackArgs,
+    /// Ghost bounds precomputed over a range of angles (else traced for each light), as
+    /// `render --precomputed`: `flarebench precompute`'s JSON or OpenLensFlare's XML. With
+    /// --frames and without it, one table is built for the lens and used for every frame.
+    #[arg(long, value_name = "FILE")]
+    pub precomputed: Option<PathBuf>,
+    /// Apply to a numbered sequence: frames A..B, both included (or one frame A), of the
+    /// image pattern, written to the output pattern (`-o out.####.exr`). One exposure and one
+    /// bounds table for every frame. docs/cli.md § Sequences.
+    #[arg(long, value_name = "A..B", value_parser = FrameRange::parse)]
+    pub frames: Option<FrameRange>,
+    /// Apply only to this share of --frames: the frames with (frame − A) % N == I. Each
+    /// frame is the same whichever shard writes it.
+    #[arg(long, value_name = "I/N", value_parser = Shard::parse, requires = "frames")]
+    pub shard: Option<Shard>,
 }
 
 /// One detected light.
@@ -127,10 +145,91 @@ struct ApplyReport {
 }
 
 pub fn run(args: &ApplyArgs, quiet: bool) -> anyhow::Result<()> {
+    if args.frames.is_some() {
+        return super::apply_sequence::run(args, quiet);
+    }
     let loaded = lens_library::load(&args.lens, quiet || args.json)?;
     let system = args.sensor_stack.apply(loaded.system.clone())?;
     let sys = &system;
+    let table = match &args.precomputed {
+        Some(p) => Some(load_precomputed(p, sys, quiet || args.json)?),
+        None => None,
+    };
     let input = read_input_image(&args.image)?;
+    let bg = &input.image;
+    let mut flare = Flare::open(args.backend)?;
+    let applied = apply_to(args, sys, &input, table.as_ref(), &mut flare)?;
+    let tone = ToneMap {
+        exposure_ev: args.exposure_ev.unwrap_or(0.0),
+        operator: args.tone.unwrap_or(ToneOperator::Clamp),
+    };
+    save_image_as(&applied.out, &args.output, &tone, args.precision())?;
+    let out = &applied.out;
+    let found = applied.found;
+    let changed_pixels = (OutputFormat::from_path(&args.output)? == OutputFormat::Png)
+        .then(|| changed_away_from_lights(bg, out, &found.applied, &tone));
+
+    let report = ApplyReport {
+        lens: sys.name.clone(),
+        image: args.image.display().to_string(),
+        output: args.output.display().to_string(),
+        width: bg.width,
+        height: bg.height,
+        hdr: input.hdr,
+        threshold: applied.threshold,
+        ghosts_traced: applied.rendered.ghosts_drawn(),
+        changed_pixels,
+        lights: found.applied,
+        skipped: found.skipped,
+        starbursts: applied.rendered.starbursts,
+        backend: flare.backend().report().clone(),
+    };
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else if !quiet {
+        report.print(&args.output);
+    }
+    if !quiet && !report.lights.is_empty() && report.changed_pixels == Some(0) {
+        eprintln!(
+            "warning: the flare changes no pixel more than {AWAY_FROM_LIGHT_PX} px from the \
+             lights by one 8-bit step (gain {}): raise --gain or --exposure-ev to see it",
+            applied.gain
+        );
+    }
+    Ok(())
+}
+
+impl ApplyArgs {
+    /// The EXR output's precision.
+    pub(super) fn precision(&self) -> ExrPrecision {
+        if self.exr_half {
+            ExrPrecision::Half
+        } else {
+            ExrPrecision::Float
+        }
+    }
+}
+
+/// One image with the flare added: the image, the lights found, what the flare was, and the
+/// threshold and gain used.
+pub(super) struct Applied {
+    pub out: HdrImage,
+    pub found: FoundLights,
+    pub rendered: Rendered,
+    pub threshold: f32,
+    pub gain: f64,
+}
+
+/// Finds the lights of `input` and adds their flare through `sys` (ghost bounds from `table`
+/// when given), drawn by `flare`: what `apply` does to one image, and to each frame of a
+/// sequence.
+pub(super) fn apply_to(
+    args: &ApplyArgs,
+    sys: &LensSystem,
+    input: &InputImage,
+    table: Option<&BoundsTable>,
+    flare: &mut Flare,
+) -> anyhow::Result<Applied> {
     let bg = &input.image;
     let gain = match args.gain {
         Some(g) => g,
@@ -141,17 +240,7 @@ pub fn run(args: &ApplyArgs, quiet: bool) -> anyhow::Result<()> {
         gain.is_finite() && gain > 0.0,
         "--gain must be positive, got {gain}"
     );
-    let film_w = args.film_width_mm.unwrap_or(sys.film_width_mm);
-    anyhow::ensure!(
-        film_w.is_finite() && film_w > 0.0,
-        "--film-width-mm must be positive, got {film_w}"
-    );
-    let frame = Frame {
-        width: bg.width,
-        height: bg.height,
-        film_width_mm: film_w,
-        film_height_mm: film_w * bg.height as f64 / bg.width as f64,
-    };
+    let frame = frame_of(args, sys, bg)?;
     let threshold = args.threshold.unwrap_or(if input.hdr { 1.0 } else { 0.95 });
     anyhow::ensure!(
         threshold.is_finite() && threshold > 0.0,
@@ -167,57 +256,39 @@ pub fn run(args: &ApplyArgs, quiet: bool) -> anyhow::Result<()> {
         dust: dust.as_ref(),
         ..Scene::new(sys, &found.lights, &aperture, frame)
     };
-    let mut flare = Flare::open(args.backend)?;
     let rendered = flare.render(
         &scene,
-        &Preset::new(PlanOptions::for_quality(args.quality, None)),
+        &Preset::new(PlanOptions::for_quality(args.quality, table)),
     )?;
     let out = add_onto(bg, flare.image())?;
-    let tone = ToneMap {
-        exposure_ev: args.exposure_ev.unwrap_or(0.0),
-        operator: args.tone.unwrap_or(ToneOperator::Clamp),
-    };
-    let precision = if args.exr_half {
-        ExrPrecision::Half
-    } else {
-        ExrPrecision::Float
-    };
-    save_image_as(&out, &args.output, &tone, precision)?;
-    let changed_pixels = (OutputFormat::from_path(&args.output)? == OutputFormat::Png)
-        .then(|| changed_away_from_lights(bg, &out, &found.applied, &tone));
+    Ok(Applied {
+        out,
+        found,
+        rendered,
+        threshold,
+        gain,
+    })
+}
 
-    let report = ApplyReport {
-        lens: sys.name.clone(),
-        image: args.image.display().to_string(),
-        output: args.output.display().to_string(),
+/// The frame an image of `bg`'s size spans: `--film-width-mm` (default the lens file's)
+/// across its width.
+pub(super) fn frame_of(args: &ApplyArgs, sys: &LensSystem, bg: &HdrImage) -> anyhow::Result<Frame> {
+    let film_w = args.film_width_mm.unwrap_or(sys.film_width_mm);
+    anyhow::ensure!(
+        film_w.is_finite() && film_w > 0.0,
+        "--film-width-mm must be positive, got {film_w}"
+    );
+    Ok(Frame {
         width: bg.width,
         height: bg.height,
-        hdr: input.hdr,
-        threshold,
-        ghosts_traced: rendered.ghosts_drawn(),
-        changed_pixels,
-        lights: found.applied,
-        skipped: found.skipped,
-        starbursts: rendered.starbursts,
-        backend: flare.backend().report().clone(),
-    };
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
-    } else if !quiet {
-        report.print(&args.output);
-    }
-    if !quiet && !report.lights.is_empty() && report.changed_pixels == Some(0) {
-        eprintln!(
-            "warning: the flare changes no pixel more than {AWAY_FROM_LIGHT_PX} px from the \
-             lights by one 8-bit step (gain {gain}): raise --gain or --exposure-ev to see it"
-        );
-    }
-    Ok(())
+        film_width_mm: film_w,
+        film_height_mm: film_w * bg.height as f64 / bg.width as f64,
+    })
 }
 
 /// The lights found in an image, the sources they came from and those left out.
-struct FoundLights {
-    lights: Vec<LightSpec>,
+pub(super) struct FoundLights {
+    pub lights: Vec<LightSpec>,
     applied: Vec<AppliedLight>,
     skipped: Vec<(Source, String)>,
 }

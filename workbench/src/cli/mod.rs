@@ -1,6 +1,7 @@
 //! Command-line interface: argument parsing and dispatch.
 
 mod apply;
+mod apply_sequence;
 mod bench;
 mod coatings;
 mod compare;

@@ -145,6 +145,20 @@ impl GhostMeasure {
     }
 }
 
+impl GhostMeasure {
+    /// This measure of a window moved to where the window lies in the frame (its top-left
+    /// pixel at `(x0, y0)`). A ghost's window holds every pixel it lights, so this is the
+    /// measure of its whole frame, bit for bit: the pixels outside add zeros.
+    pub fn at(self, x0: usize, y0: usize) -> GhostMeasure {
+        let shift = |b: [usize; 4]| [b[0] + x0, b[1] + y0, b[2] + x0, b[3] + y0];
+        GhostMeasure {
+            box_px: self.box_px.map(shift),
+            extent_px: self.extent_px.map(shift),
+            ..self
+        }
+    }
+}
+
 /// The span `lo..hi` of `sums` left when no more than `tail` is cut from each end (every
 /// non-zero entry with `tail` 0).
 fn trimmed(sums: &[f64], tail: f64) -> (usize, usize) {

@@ -13,6 +13,7 @@
 //!   [`SampleSpec`].
 //! - [`sample`]: [`render_sample`]`(&SampleSpec)` → [`SampleOutput`], the layers and the
 //!   annotation.
+//! - [`ghost_layers`]: the ghost layers summed from each ghost drawn alone in its window.
 //! - [`annotation`]: the annotation's schema, ghost energies and boxes.
 //! - [`layers`]: the EXR (named channels) and PNG files of a sample.
 //! - [`manifest`]: the directory's layout, records, the manifest, resuming.
@@ -20,6 +21,7 @@
 
 pub mod annotation;
 pub mod config;
+pub mod ghost_layers;
 pub mod layers;
 pub mod manifest;
 pub mod rng;

@@ -2,30 +2,45 @@
 //! images) and its [`Annotation`], always on the CPU (a GPU's bits differ from machine to
 //! machine), so a sample is the same bytes on every machine and in every run.
 //!
-//! The flare is rendered once ([`Flare::render`], its ghosts kept before the starbursts are
-//! added); the starbursts alone once more. Each drawn ghost is then drawn alone on a black
-//! frame, in plan order, for its energy and box, the ID layer (the ghost adding the most
-//! luminance at each pixel; the first in plan order on a tie) and the per-light layers.
+//! The pipeline is `Flare::render`'s (plan, ghosts, starbursts, automatic exposure) with the
+//! ghosts drawn differently: each drawn ghost is drawn once, alone, into the window of the
+//! frame it lights (`ghost_raytrace::tiles`, ghosts in parallel), and the ghost layers are
+//! summed from those windows in plan order ([`super::ghost_layers`]): the ghosts, each
+//! light's ghosts, and the ID layer. A ghost's window gives its energy and box. The ghosts'
+//! sum is the frame `Flare::render` draws up to the order of the f32 additions (relative
+//! RMSE and energy within 1e-6, `workbench/tests/dataset.rs`). The starbursts are then added
+//! to the ghosts (the flare), to black (the starburst layer) and to each light's layer.
 
 use anyhow::Context;
-use flarebench_sdk::aperture::Aperture;
+use flarebench_sdk::LensSystem;
+use flarebench_sdk::aperture::{Aperture, ApertureMask};
 use flarebench_sdk::color::LightSpectrum;
-use flarebench_sdk::color::srgb::luminance_f32;
+use flarebench_sdk::frame::Frame;
 use flarebench_sdk::image::HdrImage;
 use flarebench_sdk::io::read_lens;
 use flarebench_sdk::paraxial::analyse;
 use flarebench_sdk::spectrum::LAMBDA_D_NM;
+use flarebench_sdk::starburst::StarburstCache;
 use flarebench_sdk::starburst::{StarburstSettings, chief_ray_landing};
-use ghost_raytrace::ghosts::{self, RenderOptions, RenderScratch};
-use ghost_raytrace::plan::PlanOptions;
+use ghost_raytrace::ghosts::RenderOptions;
+use ghost_raytrace::plan::{self, PlanOptions};
 use ghost_raytrace::scene::LightSpec;
+use ghost_raytrace::tiles::{GhostTile, TileBuffers, render_ghost_tiles};
+use rayon::prelude::*;
 
 use super::annotation::{
     Annotation, GhostAnnotation, GhostMeasure, LensFigures, LightAnnotation, RenderFigures,
 };
+use super::ghost_layers::{add_tiles, ghost_ids};
 use super::sampler::{ApertureSpec, SampleSpec};
 use crate::aperture_file::{MaskEncoding, load_aperture_mask};
+use crate::flare::compose::add_starbursts;
+use crate::flare::exposure::{auto_exposure, ghost_exposure};
 use crate::flare::{BackendChoice, Flare, Preset, Scene, StarburstMode, frame_for};
+
+/// The frame-sized buffers ghosts are drawn into, kept from sample to sample (at most one per
+/// ghost drawn at once, of the last frame size met).
+static TILE_BUFFERS: TileBuffers = TileBuffers::new();
 
 /// The annotation file's format name.
 pub const ANNOTATION_FORMAT: &str = "flarebench-dataset-sample-1";
@@ -87,149 +102,190 @@ fn aperture_of(spec: &SampleSpec) -> anyhow::Result<Aperture> {
     Ok(aperture)
 }
 
-/// Renders `spec`.
-pub fn render_sample(spec: &SampleSpec) -> anyhow::Result<SampleOutput> {
-    let mut system = read_lens(&spec.lens_path)
-        .with_context(|| format!("could not load lens `{}`", spec.lens))?
-        .system;
-    system.f_number = Some(spec.f_number);
-    let sys = &system;
-    let para = analyse(sys, sys.default_wavelength_nm()).context("paraxial analysis")?;
-    let frame = frame_for(sys, (spec.size[0], spec.size[1]));
-    let aperture = aperture_of(spec)?;
-    let dust = match &spec.dust_path {
-        Some(p) => Some(
-            load_aperture_mask(p, MaskEncoding::Transmission)
-                .with_context(|| format!("dust `{}`", spec.dust.as_deref().unwrap_or("")))?
-                .mask,
-        ),
-        None => None,
-    };
-    let lights: Vec<LightSpec> = spec
-        .lights
-        .iter()
-        .map(|l| LightSpec {
-            theta_deg: l.theta_deg,
-            phi_deg: l.phi_deg,
-            intensity: l.intensity,
-            spectrum: LightSpectrum::Blackbody { kelvin: l.kelvin },
+/// What a sample is rendered from: its lens at its f-number, aperture, dust, lights, frame
+/// and starburst settings.
+struct Setup {
+    system: LensSystem,
+    aperture: Aperture,
+    dust: Option<ApertureMask>,
+    lights: Vec<LightSpec>,
+    frame: Frame,
+    settings: StarburstSettings,
+    with_starbursts: bool,
+}
+
+impl Setup {
+    fn of(spec: &SampleSpec) -> anyhow::Result<Setup> {
+        let mut system = read_lens(&spec.lens_path)
+            .with_context(|| format!("could not load lens `{}`", spec.lens))?
+            .system;
+        system.f_number = Some(spec.f_number);
+        let frame = frame_for(&system, (spec.size[0], spec.size[1]));
+        let aperture = aperture_of(spec)?;
+        let dust = match &spec.dust_path {
+            Some(p) => Some(
+                load_aperture_mask(p, MaskEncoding::Transmission)
+                    .with_context(|| format!("dust `{}`", spec.dust.as_deref().unwrap_or("")))?
+                    .mask,
+            ),
+            None => None,
+        };
+        let lights = spec
+            .lights
+            .iter()
+            .map(|l| LightSpec {
+                theta_deg: l.theta_deg,
+                phi_deg: l.phi_deg,
+                intensity: l.intensity,
+                spectrum: LightSpectrum::Blackbody { kelvin: l.kelvin },
+            })
+            .collect();
+        let settings = StarburstSettings {
+            pupil_texels: spec.starburst_texels,
+            ..StarburstSettings::default()
+        };
+        settings.validate().context("starburst_texels")?;
+        Ok(Setup {
+            system,
+            aperture,
+            dust,
+            lights,
+            frame,
+            settings,
+            with_starbursts: spec.layers.starburst,
         })
-        .collect();
-    let settings = StarburstSettings {
-        pupil_texels: spec.starburst_texels,
-        ..StarburstSettings::default()
-    };
-    settings.validate().context("starburst_texels")?;
-    let with_starbursts = spec.layers.starburst;
-    let scene = Scene {
-        starburst: if with_starbursts {
-            StarburstMode::On
-        } else {
-            StarburstMode::Off
-        },
-        starburst_settings: settings,
-        dust: dust.as_ref(),
-        ..Scene::new(sys, &lights, &aperture, frame)
-    };
-    let plan = PlanOptions::for_quality(spec.quality, None);
+    }
+
+    fn scene(&self) -> Scene<'_> {
+        Scene {
+            starburst: if self.with_starbursts {
+                StarburstMode::On
+            } else {
+                StarburstMode::Off
+            },
+            starburst_settings: self.settings,
+            dust: self.dust.as_ref(),
+            ..Scene::new(&self.system, &self.lights, &self.aperture, self.frame)
+        }
+    }
+}
+
+/// `spec`'s scene drawn the ordinary way, by `Flare::render` on the CPU (all ghosts at
+/// once, then the starbursts): the flare and its ghosts alone. [`render_sample`]'s flare and
+/// ghost layers are this up to the order of the f32 additions.
+pub fn render_whole(spec: &SampleSpec) -> anyhow::Result<(HdrImage, HdrImage)> {
+    let setup = Setup::of(spec)?;
     let preset = Preset {
-        exposure: true,
-        keep_ghosts: with_starbursts,
-        ..Preset::new(plan)
+        keep_ghosts: true,
+        ..Preset::new(PlanOptions::for_quality(spec.quality, None))
     };
     let mut flare = Flare::open(BackendChoice::Cpu)?;
-    let mut rendered = flare
-        .render(&scene, &preset)
-        .with_context(|| format!("sample {}", spec.index))?;
-    let flare_img = flare.take_image();
-    let ghosts_img = rendered
-        .ghosts_image
-        .take()
-        .unwrap_or_else(|| flare_img.clone());
+    let mut rendered = flare.render(&setup.scene(), &preset)?;
+    let ghosts = rendered.ghosts_image.take().expect("kept with keep_ghosts");
+    Ok((flare.take_image(), ghosts))
+}
 
-    // The starbursts alone: all lights, then (for the per-light layers) each.
-    let only = |lights: &[LightSpec], flare: &mut Flare| -> anyhow::Result<HdrImage> {
-        let s = Scene {
-            starburst: StarburstMode::Only,
-            lights,
-            ..scene
-        };
-        flare.render(&s, &Preset::new(plan))?;
-        Ok(flare.take_image())
-    };
-    let starburst = if with_starbursts {
-        Some(only(&lights, &mut flare)?)
+/// Renders `spec`.
+pub fn render_sample(spec: &SampleSpec) -> anyhow::Result<SampleOutput> {
+    let setup = Setup::of(spec)?;
+    let scene = setup.scene();
+    let (sys, frame, lights) = (&setup.system, setup.frame, &setup.lights);
+    let aperture = &setup.aperture;
+    let with_starbursts = setup.with_starbursts;
+    let para = analyse(sys, sys.default_wavelength_nm()).context("paraxial analysis")?;
+    let plan_options = PlanOptions::for_quality(spec.quality, None);
+    let plans = if lights.is_empty() {
+        Vec::new()
     } else {
-        None
+        plan::plan(sys, lights, &frame, &plan_options)
+            .with_context(|| format!("sample {}", spec.index))?
     };
+
+    // Every ghost drawn once, alone, into the window it lights; the layers are their sums.
+    let tiles = render_ghost_tiles(
+        sys,
+        aperture,
+        frame,
+        &plans,
+        RenderOptions::default(),
+        &TILE_BUFFERS,
+    )
+    .with_context(|| format!("sample {}", spec.index))?;
+    let all: Vec<&GhostTile> = tiles.iter().collect();
+    let mut ghosts_img = HdrImage::new(frame.width, frame.height);
+    add_tiles(&mut ghosts_img, &all);
     let mut per_light: Vec<HdrImage> = Vec::new();
     if spec.layers.per_light {
-        for light in &lights {
-            per_light.push(if with_starbursts {
-                only(std::slice::from_ref(light), &mut flare)?
-            } else {
-                HdrImage::new(frame.width, frame.height)
-            });
+        for li in 0..lights.len() {
+            let mut layer = HdrImage::new(frame.width, frame.height);
+            let own: Vec<&GhostTile> = tiles.iter().filter(|t| t.light == li).collect();
+            add_tiles(&mut layer, &own);
+            per_light.push(layer);
         }
     }
+    let ghost_id = spec
+        .layers
+        .ghost_id
+        .then(|| ghost_ids(frame.width, frame.height, &tiles));
 
-    // Each ghost alone.
-    let n_px = frame.width * frame.height;
-    let mut ghost_id = spec.layers.ghost_id.then(|| vec![0u32; n_px]);
-    let mut best = if spec.layers.ghost_id {
-        vec![0f32; n_px]
-    } else {
-        Vec::new()
-    };
-    let mut alone = HdrImage::new(frame.width, frame.height);
-    let mut scratch = RenderScratch::default();
-    let mut ghost_notes = Vec::new();
-    let options = RenderOptions {
-        replace: false,
-        ..preset.render
-    };
-    for (li, lp) in rendered.plans.iter().enumerate() {
-        for (gi, job) in lp.ghosts.iter().enumerate() {
-            let id = ghost_notes.len() as u32 + 1;
-            let mut one = lp.clone();
-            one.ghosts = vec![job.clone()];
-            one.dropped.clear();
-            alone.fill_black();
-            ghosts::render_into_reusing(
+    // The starbursts: added to the ghosts (the flare), alone (all lights), and to each
+    // light's layer — what `Flare::render` does after drawing the ghosts.
+    let starburst_setup = scene.starburst_setup();
+    let mut cache = StarburstCache::new();
+    let mut flare_img = ghosts_img.clone();
+    let mut starburst_lines = Vec::new();
+    let mut starburst = None;
+    if with_starbursts {
+        starburst_lines = add_starbursts(
+            &mut flare_img,
+            sys,
+            &frame,
+            lights,
+            &starburst_setup,
+            &mut cache,
+        )
+        .with_context(|| format!("sample {}", spec.index))?;
+        let mut alone = HdrImage::new(frame.width, frame.height);
+        add_starbursts(
+            &mut alone,
+            sys,
+            &frame,
+            lights,
+            &starburst_setup,
+            &mut cache,
+        )?;
+        starburst = Some(alone);
+        for (layer, light) in per_light.iter_mut().zip(lights) {
+            add_starbursts(
+                layer,
                 sys,
-                &aperture,
-                frame,
-                std::slice::from_ref(&one),
-                options,
-                &mut scratch,
-                &mut alone.pixels,
-            )
-            .with_context(|| format!("sample {}: ghost {}", spec.index, job.path))?;
-            if let Some(ids) = ghost_id.as_mut() {
-                for ((p, b), i) in alone.pixels.iter().zip(best.iter_mut()).zip(ids.iter_mut()) {
-                    let l = luminance_f32(*p);
-                    if l > *b {
-                        *b = l;
-                        *i = id;
-                    }
-                }
-            }
-            if let Some(layer) = per_light.get_mut(li) {
-                for (o, p) in layer.pixels.iter_mut().zip(&alone.pixels) {
-                    for c in 0..3 {
-                        o[c] += p[c];
-                    }
-                }
-            }
-            ghost_notes.push(GhostAnnotation {
-                id,
-                light: li,
-                path: job.path.to_string(),
-                measure: GhostMeasure::of(&alone),
-                flux: rendered.ghost_stats[li].get(gi).map_or(0.0, |s| s.flux),
-            });
+                &frame,
+                std::slice::from_ref(light),
+                &starburst_setup,
+                &mut cache,
+            )?;
         }
     }
+    anyhow::ensure!(
+        !flare_img.has_non_finite(),
+        "internal error: sample {} has non-finite pixels",
+        spec.index
+    );
+    // The automatic exposure as `Flare::render` finds it: the ghosts', else the flare's.
+    let exposure_ev = ghost_exposure(&ghosts_img).unwrap_or_else(|| auto_exposure(&flare_img));
+
+    // Each ghost's measure on its own (in parallel; each is the same bits on any thread).
+    let ghost_notes: Vec<GhostAnnotation> = tiles
+        .par_iter()
+        .enumerate()
+        .map(|(k, t)| GhostAnnotation {
+            id: k as u32 + 1,
+            light: t.light,
+            path: plans[t.light].ghosts[t.ghost].path.to_string(),
+            measure: GhostMeasure::of(&t.image).at(t.x0, t.y0),
+            flux: t.stats.flux,
+        })
+        .collect();
 
     let light_notes = spec
         .lights
@@ -244,8 +300,8 @@ pub fn render_sample(spec: &SampleSpec) -> anyhow::Result<SampleOutput> {
             )
             .ok()
             .map(|c| frame.to_pixel(c[0], c[1]).map(f64::from));
-            let plan = rendered.plans.get(k);
-            let sb = rendered.starbursts.get(k);
+            let plan = plans.get(k);
+            let sb = starburst_lines.get(k);
             LightAnnotation {
                 light: k,
                 theta_deg: l.theta_deg,
@@ -263,15 +319,15 @@ pub fn render_sample(spec: &SampleSpec) -> anyhow::Result<SampleOutput> {
         .collect();
 
     let figures = RenderFigures {
-        ghosts_drawn: rendered.ghosts_drawn(),
-        ghosts_left_out: rendered.plans.iter().map(|p| p.dropped.len()).sum(),
-        rays_traced: rendered.rays_traced(),
-        triangles: rendered.triangles(),
+        ghosts_drawn: tiles.len(),
+        ghosts_left_out: plans.iter().map(|p| p.dropped.len()).sum(),
+        rays_traced: tiles.iter().map(|t| t.stats.rays).sum(),
+        triangles: tiles.iter().map(|t| t.stats.triangles).sum(),
         flare_sum_rgb: flare_img.sum(),
         ghosts_sum_rgb: ghosts_img.sum(),
         starburst_sum_rgb: starburst.as_ref().map(HdrImage::sum),
         flare_max: flare_img.max(),
-        exposure_ev: rendered.exposure_ev.unwrap_or(0.0),
+        exposure_ev,
     };
     let mut out = SampleOutput {
         flare: flare_img,
