@@ -6,6 +6,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, ensure};
+use indicatif::{ProgressBar, ProgressStyle};
 
 /// Frames `first..=last`, both ends included (as the `..` ranges of `flarebench lenses`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -145,6 +146,22 @@ impl FramePattern {
             width = self.digits
         ))
     }
+}
+
+/// A sequence's progress bar over `len` frames, labelled `msg` (hidden when `quiet`).
+pub fn frames_bar(quiet: bool, len: u64, msg: &'static str) -> ProgressBar {
+    if quiet {
+        return ProgressBar::hidden();
+    }
+    ProgressBar::new(len)
+        .with_style(
+            ProgressStyle::with_template(
+                "{msg:9} [{bar:30}] {pos}/{len} frames, {elapsed} (eta {eta})",
+            )
+            .expect("valid template")
+            .progress_chars("=> "),
+        )
+        .with_message(msg)
 }
 
 #[cfg(test)]

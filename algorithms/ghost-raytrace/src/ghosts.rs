@@ -139,6 +139,22 @@ pub fn render_into_reusing(
     Ok(stats)
 }
 
+/// Each light's plan without its ghosts (nothing drawn, nothing dropped): the base a single
+/// ghost's own plan is made from.
+pub(crate) fn without_ghosts(plans: &[LightPlan]) -> Vec<LightPlan> {
+    plans
+        .iter()
+        .map(|p| LightPlan {
+            ghosts: Vec::new(),
+            dropped: Vec::new(),
+            light: p.light.clone(),
+            bands: p.bands.clone(),
+            not_in_table: Vec::new(),
+            ..*p
+        })
+        .collect()
+}
+
 /// Renders every planned ghost alone, each into a black image of the frame's size, and hands
 /// it to `each` with its light's index and its job: what a per-ghost comparison (`flarebench
 /// sweep`) measures. Ghosts are rendered in parallel; returns what `each` returned, in plan
@@ -157,17 +173,7 @@ pub fn render_each_ghost<R: Send>(
         ..options
     };
     // Each light's plan without its ghosts: a ghost's own plan is this with the ghost added.
-    let empty: Vec<LightPlan> = plans
-        .iter()
-        .map(|p| LightPlan {
-            ghosts: Vec::new(),
-            dropped: Vec::new(),
-            light: p.light.clone(),
-            bands: p.bands.clone(),
-            not_in_table: Vec::new(),
-            ..*p
-        })
-        .collect();
+    let empty = without_ghosts(plans);
     let jobs: Vec<(usize, usize, &GhostJob)> = plans
         .iter()
         .enumerate()

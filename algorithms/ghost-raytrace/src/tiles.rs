@@ -118,17 +118,7 @@ pub fn render_ghost_tiles(
         ..options
     };
     // Each light's plan without its ghosts: a ghost's own plan is this with the ghost added.
-    let empty: Vec<LightPlan> = plans
-        .iter()
-        .map(|p| LightPlan {
-            ghosts: Vec::new(),
-            dropped: Vec::new(),
-            light: p.light.clone(),
-            bands: p.bands.clone(),
-            not_in_table: Vec::new(),
-            ..*p
-        })
-        .collect();
+    let empty = crate::ghosts::without_ghosts(plans);
     let jobs: Vec<(usize, usize)> = plans
         .iter()
         .enumerate()

@@ -34,7 +34,7 @@ use crate::input_image::read_input_image;
 use crate::lens_library;
 use crate::output::{OutputFormat, ToneMap, ToneOperator, save_image_as};
 use crate::precomputed::load_precomputed;
-use crate::sequence::{FramePattern, Shard};
+use crate::sequence::{FramePattern, Shard, frames_bar as bar};
 
 /// Angle step of the table built for a sequence (degrees): `precompute`'s default.
 const TABLE_STEP_DEG: f64 = 0.25;
@@ -71,21 +71,6 @@ struct SequenceReport {
     /// Drawing and writing this process's frames (s), and frames per second.
     seconds: f64,
     frames_per_second: f64,
-}
-
-fn bar(quiet: bool, len: u64, msg: &'static str) -> ProgressBar {
-    if quiet {
-        return ProgressBar::hidden();
-    }
-    ProgressBar::new(len)
-        .with_style(
-            ProgressStyle::with_template(
-                "{msg:9} [{bar:30}] {pos}/{len} frames, {elapsed} (eta {eta})",
-            )
-            .expect("valid template")
-            .progress_chars("=> "),
-        )
-        .with_message(msg)
 }
 
 pub fn run(args: &ApplyArgs, quiet: bool) -> anyhow::Result<()> {

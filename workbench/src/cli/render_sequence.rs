@@ -17,7 +17,6 @@ use anyhow::Context;
 use ghost_raytrace::ghosts::RenderOptions;
 use ghost_raytrace::plan::{self, WarmStart};
 use ghost_raytrace::scene::LightSpec;
-use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 
 use super::render::{RenderArgs, ms, write_output};
@@ -27,7 +26,7 @@ use crate::lens_library;
 use crate::light_path::LightPath;
 use crate::output::{OutputFormat, ToneMap, ToneOperator};
 use crate::precomputed::load_precomputed;
-use crate::sequence::{FramePattern, Shard};
+use crate::sequence::{FramePattern, Shard, frames_bar as bar};
 
 /// Frames per warm-start anchor: frame `f` plans from the rectangles of frame
 /// `WARM_START_BLOCK · ⌊f / WARM_START_BLOCK⌋` (which may lie before A). Within a block a moving light stays
@@ -82,21 +81,6 @@ fn short(x: f64) -> String {
     let s = format!("{x:.4}");
     let s = s.trim_end_matches('0').trim_end_matches('.');
     if s == "-0" { "0".into() } else { s.into() }
-}
-
-fn bar(quiet: bool, len: u64, msg: &'static str) -> ProgressBar {
-    if quiet {
-        return ProgressBar::hidden();
-    }
-    ProgressBar::new(len)
-        .with_style(
-            ProgressStyle::with_template(
-                "{msg:9} [{bar:30}] {pos}/{len} frames, {elapsed} (eta {eta})",
-            )
-            .expect("valid template")
-            .progress_chars("=> "),
-        )
-        .with_message(msg)
 }
 
 pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
