@@ -391,3 +391,48 @@ fn a_lens_written_as_our_xml_reads_back_equal() {
         assert_eq!(back, original, "{}", path.display());
     }
 }
+
+/// The Zeiss Hologon 15 mm f/8's table as FlareSim gives it (DE01241637): its stop in a film
+/// of air of no thickness between two flats of its middle element's glass.
+const HOLOGON: &str = "\
+name: Zeiss Hologon f8 15mm
+focal_length: 15.00
+
+surfaces:
+  11.6400        7.9785       1.80518  25.46    21.800    1
+  3.8430         2.7030       1.00000  0.00     7.630     0
+  5.6685         4.1685       1.71300  53.89    7.190     1
+  0              0.0000       1.00000  0.00     1.534     0
+  stop           0.0000       1.00000  0.00     1000000.000 0
+  0              3.4800       1.71300  53.89    1.534     1
+  -5.5080        2.4045       1.00000  0.00     6.840     0
+  -3.6285        5.2365       1.80518  25.46    7.257     1
+  -8.9835        4.5420       1.00000  0.00     17.310    0
+";
+
+#[test]
+fn a_stop_in_a_film_of_air_of_no_thickness_between_flats_of_one_glass_is_inside_the_glass() {
+    let lens = parse_flaresim(HOLOGON, "hologon.lens", None, false).expect("the table reads");
+    let s = &lens.system.surfaces;
+    let glass = s[2].medium.clone();
+    assert!(
+        matches!(glass, Medium::Model { nd, .. } if nd == 1.713),
+        "{glass:?}"
+    );
+    // The near flat and the stop lie in the glass; the far flat leaves it into the same glass.
+    for (k, surface) in s.iter().enumerate().take(6).skip(3) {
+        assert_eq!(surface.medium, glass, "surface {k}");
+    }
+    assert_eq!(s[5].coating, Coating::None);
+    assert!(lens.system.notes.contains("the stop inside the glass"));
+    // A film of air would reflect the chief ray at 49° totally at the near flat (the stop
+    // crossing jumped from −0.45 to +0.03 mm over the rays it reflected); in the glass it
+    // passes.
+    let found = flarebench_sdk::starburst::chief_ray_landing(
+        &lens.system,
+        LAMBDA_D_NM,
+        49f64.to_radians(),
+        0.0,
+    );
+    assert!(found.is_ok(), "{found:?}");
+}

@@ -329,10 +329,23 @@ impl EdgeFeathers {
 /// beyond it, the triangle is a sliver and is widened across its longest edge instead.
 const SLIVER_REACH_AIRY: f64 = 4.0;
 
+/// The longest edge (as a share of the reach, [`SLIVER_REACH_AIRY`] Airy radii: so one Airy
+/// radius) below which a triangle grown to the Airy disc is drawn as a compact triangle of the
+/// disc's area at its centroid (the degenerate triangle's shape), whatever its own shape. A
+/// ghost focused to a few µm (at f/64: the Zhong Yi 135 mm's 8-7, 1 × 0.2 µm… its cells
+/// 40 × 10 µm) has triangles whose shape is set by the last digits of their corners: scaled
+/// about the centroid, each reached up to 4 Airy radii in a direction the rounding chose; as
+/// slivers widened across their longest edge, needles 290 mm long. Such a triangle's light is
+/// spread by diffraction, not by its shape: f32 against f64 went from relative RMSE 9.5e-2
+/// to 3.3e-5 on that lens (`flarebench stability`, f/64, θ 5°).
+const COMPACT_BELOW_REACH: f64 = 0.25;
+
 /// Grows triangle `p` (centroid `c`, area `area` > 0) to `min_area`, keeping its centroid:
-/// scaled about the centroid while that keeps its longest edge within `reach`, else (a
-/// sliver: a fold or a grazing ray stretches one corner far off) widened across its longest
-/// edge. Scaling a sliver by the same factor would stretch it to many times its length — a
+/// replaced by a compact triangle of `min_area` when its longest edge is below
+/// [`COMPACT_BELOW_REACH`] × `reach` or widening it across would reach beyond `reach` (a
+/// triangle below the Airy disc's resolution); else scaled about the centroid while that keeps
+/// its longest edge within `reach`, else (a sliver: a fold or a grazing ray stretches one
+/// corner far off) widened across its longest edge. Scaling a sliver by the same factor would stretch it to many times its length — a
 /// needle of the right area that crosses the frame, whose exact coverage the rasterizer's
 /// f32 arithmetic cannot resolve.
 fn grow_to_area(p: &mut [[f64; 2]; 3], c: [f64; 2], area: f64, min_area: f64, reach: f64) {
@@ -343,6 +356,16 @@ fn grow_to_area(p: &mut [[f64; 2]; 3], c: [f64; 2], area: f64, min_area: f64, re
         .max_by(|x, y| edge(x.0, x.1).total_cmp(&edge(y.0, y.1)))
         .expect("three edges");
     let len = edge(a, b);
+    // Below an Airy radius, or so short that widening it across would take it beyond `reach`,
+    // a triangle's shape is finer than the Airy disc resolves: the disc's area at its centroid.
+    let grow = 2.0 * (min_area - area) / len;
+    if len < COMPACT_BELOW_REACH * reach || grow > reach {
+        // Base 2r, height 2r, its centroid at `c`.
+        let r = (0.5 * min_area).sqrt();
+        let (below, above) = (c[1] - 2.0 * r / 3.0, c[1] + 4.0 * r / 3.0);
+        *p = [[c[0] - r, below], [c[0] + r, below], [c[0], above]];
+        return;
+    }
     if s * len <= reach || len <= 0.0 {
         for q in p.iter_mut() {
             *q = [c[0] + (q[0] - c[0]) * s, c[1] + (q[1] - c[1]) * s];
@@ -358,7 +381,6 @@ fn grow_to_area(p: &mut [[f64; 2]; 3], c: [f64; 2], area: f64, min_area: f64, re
     if to_apex[0] * n[0] + to_apex[1] * n[1] < 0.0 {
         n = [-n[0], -n[1]];
     }
-    let grow = 2.0 * (min_area - area) / len;
     p[apex] = [p[apex][0] + n[0] * grow, p[apex][1] + n[1] * grow];
     for q in p.iter_mut() {
         *q = [q[0] - n[0] * grow / 3.0, q[1] - n[1] * grow / 3.0];
@@ -490,8 +512,9 @@ mod tests {
     #[test]
     fn a_small_triangle_grows_about_its_centroid_and_a_sliver_only_across() {
         let (airy, min_area) = (1e-3, std::f64::consts::PI * 1e-6);
-        // A compact triangle of a tenth of the Airy disc's area: scaled, shape kept.
-        let mut p = [[1.0, 2.0], [1.0005, 2.0], [1.0, 2.0005]];
+        // A compact triangle of a third of the Airy disc's area, its longest edge over an Airy
+        // radius: scaled, shape kept.
+        let mut p = [[1.0, 2.0], [1.0015, 2.0], [1.0, 2.0015]];
         let (a0, c0) = area_and_centroid(&p);
         grow_to_area(&mut p, c0, a0, min_area, SLIVER_REACH_AIRY * airy);
         let (a, c) = area_and_centroid(&p);
@@ -508,6 +531,34 @@ mod tests {
         assert!((a / min_area - 1.0).abs() < 1e-9, "{a}");
         assert!((c[0] - c0[0]).abs() < 1e-12 && (c[1] - c0[1]).abs() < 1e-12);
         assert!(extent(&p) < 5.0 + 1e-6, "{p:?}");
+    }
+
+    #[test]
+    fn a_triangle_below_the_airy_disc_grows_to_the_same_compact_triangle_whatever_its_shape() {
+        // The Zhong Yi 135 mm's ghost 8-7 at f/64: focused to about 1 × 0.2 µm, its cells
+        // 40 × 10 µm (landing 11.84 mm off axis, where f32 resolves 1 µm), Airy radius 43 µm.
+        let (airy, min_area) = (0.043, std::f64::consts::PI * 0.043 * 0.043);
+        let reach = SLIVER_REACH_AIRY * airy;
+        let thin = [[0.0, 11.84], [4e-5, 11.84], [0.0, 11.84001]];
+        // The same cell with one corner moved by f32's rounding: its longest edge turns.
+        let turned = [[0.0, 11.84], [4e-5, 11.840001], [1e-6, 11.84001]];
+        let mut grown = Vec::new();
+        for mut p in [thin, turned] {
+            let (a0, c0) = area_and_centroid(&p);
+            grow_to_area(&mut p, c0, a0, min_area, reach);
+            let (a, c) = area_and_centroid(&p);
+            assert!((a / min_area - 1.0).abs() < 1e-9, "{a}");
+            assert!((c[0] - c0[0]).abs() < 1e-9 && (c[1] - c0[1]).abs() < 1e-9);
+            // Widened across its 40 µm edge it was a needle 2·min_area/len = 290 mm long.
+            assert!(extent(&p) <= reach, "{p:?}");
+            grown.push(p);
+        }
+        // One shape about (almost) one centroid: the rounding moves nothing but the centroid.
+        for k in 0..3 {
+            for i in 0..2 {
+                assert!((grown[0][k][i] - grown[1][k][i]).abs() < 1e-6, "{grown:?}");
+            }
+        }
     }
 
     #[test]

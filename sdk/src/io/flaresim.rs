@@ -259,7 +259,30 @@ fn build_surfaces(
     let mut stop_seen = false;
     let mut bare = Vec::new();
     let mut before = 1.0;
+    let gap = stop_in_glass(&table.rows);
+    if let Some(g) = &gap {
+        notes.push(format!(
+            "Stop: the rows on lines {} to {} put the stop in a film of air of no thickness \
+             between two flat faces of the same glass (nd {}); read as the stop inside the \
+             glass (a gap of no width is no interface: light crosses it whatever the angle, \
+             where a film of air would reflect every ray past the critical angle), the flats' \
+             semi-diameters kept as the opening and the far face's coating left out.",
+            table.rows[*g.start()].line,
+            table.rows[g.end() + 1].line,
+            table.rows[g.start() - 1].ior
+        ));
+    }
     for (i, row) in table.rows.iter().enumerate() {
+        let mut row = *row;
+        if let Some(g) = &gap {
+            if g.contains(&i) {
+                let glass = table.rows[g.start() - 1];
+                (row.ior, row.abbe, row.coating) = (glass.ior, glass.abbe, 0);
+            } else if i == g.end() + 1 {
+                row.coating = 0;
+            }
+        }
+        let row = &row;
         let medium = if row.ior == 1.0 {
             Medium::Air
         } else if row.abbe > 0.0 {
@@ -355,6 +378,32 @@ fn build_surfaces(
     }
     surfaces.push(Surface::sensor(0.5 * FILM_MM.0.hypot(FILM_MM.1)));
     Ok(surfaces)
+}
+
+/// The rows of a stop set in a film of air of no thickness between two flat faces of the same
+/// glass (the Zeiss Hologon 15 mm's stop, in a slot of its middle element): a flat row into air
+/// of thickness 0, the stop (and any other flat rows) in air of thickness 0, then a flat row
+/// into the glass the first was in. `None` for any other table.
+fn stop_in_glass(rows: &[Row]) -> Option<std::ops::RangeInclusive<usize>> {
+    let stop = rows.iter().position(|r| r.radius == Radius::Stop)?;
+    let in_film = |r: &Row| {
+        r.ior == 1.0 && r.thickness == 0.0 && matches!(r.radius, Radius::Flat | Radius::Stop)
+    };
+    if !in_film(&rows[stop]) {
+        return None;
+    }
+    let mut first = stop;
+    while first > 0 && in_film(&rows[first - 1]) {
+        first -= 1;
+    }
+    let mut last = stop;
+    while last + 1 < rows.len() && in_film(&rows[last + 1]) {
+        last += 1;
+    }
+    let (before, after) = (rows.get(first.checked_sub(1)?)?, rows.get(last + 1)?);
+    let same_glass = before.ior > 1.0 && before.ior == after.ior && before.abbe == after.abbe;
+    (same_glass && rows[first].radius == Radius::Flat && after.radius == Radius::Flat)
+        .then_some(first..=last)
 }
 
 /// The system around `surfaces`: name, stated focal length, film, source.
