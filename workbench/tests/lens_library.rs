@@ -134,7 +134,7 @@ fn every_curated_lens_has_its_metadata_and_its_stated_focal_length() {
 
 /// One curated lens in this many is rendered in the default tier (the slow tier renders
 /// every one at three angles).
-const RENDER_SAMPLE_STEP: usize = 8;
+const RENDER_SAMPLE_STEP: usize = 16;
 
 #[test]
 fn a_sample_of_the_curated_lenses_renders_finite_in_a_tiny_frame() {
