@@ -65,26 +65,29 @@ fn the_quick_suite_passes_with_every_kind_of_check() {
     );
 }
 
-/// Library lenses on which the suite's own scan and Monte-Carlo check once failed, in tiny
-/// frames (only the chief ray and the pupil flux matter here): the Fujinon XF33 at 43° (every
-/// ray that completes its path there passes outside its front element, once counted as light
-/// crossing the stop), the Ricoh 18.3 mm on 36 × 24 mm (its image height turns over at 57°,
-/// short of the corner) and the Hasselblad HC 50 mm at f/64 (a Monte-Carlo estimate with a
-/// 4.6% standard error, held to 0.5% alone).
-#[test]
-fn the_scan_and_the_monte_carlo_check_hold_on_lenses_they_once_failed() {
-    let options = SuiteOptions {
+fn once_failed_options() -> SuiteOptions {
+    SuiteOptions {
         width: 16,
         synthetic: false,
         ..SuiteOptions::quick()
-    };
-    let find = |findings: &[Finding], check: &str| -> Finding {
-        findings
-            .iter()
-            .find(|f| f.check == check)
-            .unwrap_or_else(|| panic!("no {check} finding"))
-            .clone()
-    };
+    }
+}
+
+fn find(findings: &[Finding], check: &str) -> Finding {
+    findings
+        .iter()
+        .find(|f| f.check == check)
+        .unwrap_or_else(|| panic!("no {check} finding"))
+        .clone()
+}
+
+/// Library lenses on which the suite's own scan once failed, in tiny frames (only the chief
+/// ray matters here): the Fujinon XF33 at 43° (every ray that completes its path there passes
+/// outside its front element, once counted as light crossing the stop) and the Ricoh 18.3 mm
+/// on 36 × 24 mm (its image height turns over at 57°, short of the corner).
+#[test]
+fn the_scan_holds_on_lenses_it_once_failed() {
+    let options = once_failed_options();
     let xf33 = lens_library::load("fujifilm-fujinon-xf33-f1.4-r-lm-wr", true)
         .unwrap()
         .system;
@@ -100,11 +103,18 @@ fn the_scan_and_the_monte_carlo_check_hold_on_lenses_they_once_failed() {
     let f = stability::field::check_lens("ricoh", &ricoh, options);
     let height = find(&f, "chief-ray-height");
     assert!(height.pass && height.case == "0–57°", "{height:?}");
+}
 
+/// The Hasselblad HC 50 mm at f/64, on which the Monte-Carlo pupil flux check once failed: an
+/// estimate with a 4.6% standard error, held to 0.5% alone.
+#[test]
+#[ignore = "slow tier: the pupil flux's Monte-Carlo estimates at f/64 on a lens its sampler \
+            cannot zoom onto; by default the quick suite's pupil-flux checks on three lenses"]
+fn the_monte_carlo_pupil_flux_holds_on_the_lens_it_once_failed() {
     let hasselblad = lens_library::load("hasselblad-hc-3.5-50-fujinon", true)
         .unwrap()
         .system;
-    let s = stability::stops::check_lens("hc50", &hasselblad, options);
+    let s = stability::stops::check_lens("hc50", &hasselblad, once_failed_options());
     let mc = find(&s, "pupil-flux-mc");
     // Its limit grows by three of its standard errors (4.6%), and the estimate is within it.
     assert!(mc.limit > 0.1, "{mc:?}");

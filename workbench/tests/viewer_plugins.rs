@@ -275,9 +275,9 @@ const GPU_CPU_MAX_ENERGY: f64 = 0.001;
 fn on_the_gpu_a_plugins_preview_is_compares_gpu_image_its_own_pixels_kept() {
     let matrix = plugin_library("ghost_matrix");
     let glow = plugin_library("example_glow");
-    // A quarter of the other tests' frame: lavapipe shades the matrix ghosts' frame-wide
+    // A sixteenth of the other tests' frame: lavapipe shades the matrix ghosts' frame-wide
     // triangles one fragment at a time.
-    let size = (SIZE.0 / 2, SIZE.1 / 2);
+    let size = (SIZE.0 / 4, SIZE.1 / 4);
     let (mut viewer, _notes) = viewer_on(
         ViewerOptions {
             backend: BackendChoice::Gpu,
