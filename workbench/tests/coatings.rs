@@ -69,9 +69,13 @@ fn the_choice_cuts_the_flare_and_writes_the_catalogue_designs() {
             assert!(dir.path().join(&f).is_file(), "{f}");
         }
     }
+    let bad = flarebench(&["coatings", "heliar-tronnier", "-o", "x", "--size", "3x3"]);
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("--size wants WxH"));
 }
 
 #[test]
+#[ignore = "slow tier: a second choice on the Heliar (its bases and multicoats again); by default \
+            the choice without a budget"]
 fn the_budget_of_premium_surfaces_holds() {
     let dir = temp_dir("coatings-budget");
     let r = choose(
