@@ -148,6 +148,25 @@ impl FramePattern {
     }
 }
 
+/// The lowest exposure (EV) `exposure_of` gives over `range`'s frames, and its frame: the one
+/// exposure a whole sequence is tone-mapped with, so its brightest frame does not clip.
+pub fn darkest_exposure(
+    range: FrameRange,
+    bar: ProgressBar,
+    mut exposure_of: impl FnMut(u64) -> anyhow::Result<f32>,
+) -> anyhow::Result<(f32, u64)> {
+    let mut best: Option<(f32, u64)> = None;
+    for f in range.frames() {
+        let ev = exposure_of(f)?;
+        if best.is_none_or(|(b, _)| ev < b) {
+            best = Some((ev, f));
+        }
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    Ok(best.expect("a range holds a frame"))
+}
+
 /// A sequence's progress bar over `len` frames, labelled `msg` (hidden when `quiet`).
 pub fn frames_bar(quiet: bool, len: u64, msg: &'static str) -> ProgressBar {
     if quiet {

@@ -34,7 +34,7 @@ use crate::input_image::read_input_image;
 use crate::lens_library;
 use crate::output::{OutputFormat, ToneMap, ToneOperator, save_image_as};
 use crate::precomputed::load_precomputed;
-use crate::sequence::{FramePattern, Shard, frames_bar as bar};
+use crate::sequence::{FramePattern, Shard, darkest_exposure, frames_bar as bar};
 
 /// Angle step of the table built for a sequence (degrees): `precompute`'s default.
 const TABLE_STEP_DEG: f64 = 0.25;
@@ -119,17 +119,9 @@ pub fn run(args: &ApplyArgs, quiet: bool) -> anyhow::Result<()> {
     let (exposure_ev, exposure_frame) = match (format, args.exposure_ev) {
         (OutputFormat::Png, Some(ev)) => (Some(ev), None),
         (OutputFormat::Png, None) if first.hdr => {
-            let bar = bar(quiet, range.len(), "exposure");
-            let mut best: Option<(f32, u64)> = None;
-            for f in range.frames() {
-                let ev = auto_exposure(&read(f)?.image);
-                if best.is_none_or(|(b, _)| ev < b) {
-                    best = Some((ev, f));
-                }
-                bar.inc(1);
-            }
-            bar.finish_and_clear();
-            let (ev, f) = best.expect("a range holds a frame");
+            let (ev, f) = darkest_exposure(range, bar(quiet, range.len(), "exposure"), |f| {
+                Ok(auto_exposure(&read(f)?.image))
+            })?;
             (Some(ev), Some(f))
         }
         (OutputFormat::Png, None) => (Some(0.0), None),

@@ -26,7 +26,7 @@ use crate::lens_library;
 use crate::light_path::LightPath;
 use crate::output::{OutputFormat, ToneMap, ToneOperator};
 use crate::precomputed::load_precomputed;
-use crate::sequence::{FramePattern, Shard, frames_bar as bar};
+use crate::sequence::{FramePattern, Shard, darkest_exposure, frames_bar as bar};
 
 /// Frames per warm-start anchor: frame `f` plans from the rectangles of frame
 /// `WARM_START_BLOCK · ⌊f / WARM_START_BLOCK⌋` (which may lie before A). Within a block a moving light stays
@@ -166,17 +166,9 @@ pub fn run(args: &RenderArgs, quiet: bool) -> anyhow::Result<()> {
     let (exposure_ev, exposure_frame) = match (format, args.exposure_ev) {
         (OutputFormat::Png, Some(ev)) => (Some(ev), None),
         (OutputFormat::Png, None) => {
-            let bar = bar(quiet, range.len(), "exposure");
-            let mut best: Option<(f32, u64)> = None;
-            for f in range.frames() {
-                let ev = render(&mut flare, f, true)?.exposure_ev.unwrap_or(0.0);
-                if best.is_none_or(|(b, _)| ev < b) {
-                    best = Some((ev, f));
-                }
-                bar.inc(1);
-            }
-            bar.finish_and_clear();
-            let (ev, f) = best.expect("a range holds a frame");
+            let (ev, f) = darkest_exposure(range, bar(quiet, range.len(), "exposure"), |f| {
+                Ok(render(&mut flare, f, true)?.exposure_ev.unwrap_or(0.0))
+            })?;
             (Some(ev), Some(f))
         }
         _ => (None, None),
