@@ -8,7 +8,7 @@
 //! table of film materials). Thicknesses are physical, in nanometres. Layers are listed from
 //! the air side toward the glass; [`oriented`] turns them into a surface's order.
 
-use flarebench_sdk::coating::{CoatingLayer, stack_reflectance};
+use flarebench_sdk::coating::CoatingLayer;
 use flarebench_sdk::{Coating, LensSystem};
 use serde::Serialize;
 use std::f64::consts::PI;
@@ -170,9 +170,31 @@ pub fn oriented(mut layers: Vec<CoatingLayer>, air_first: bool) -> Vec<CoatingLa
     layers
 }
 
-/// Normal reflectance of `layers` (air side first) from air onto glass of index `substrate`.
+/// Normal reflectance of `layers` (air side first) from air onto glass of index `substrate`:
+/// [`flarebench_sdk::coating::stack_reflectance`] at normal incidence, where both polarisations are one and every
+/// angle's cosine is 1, so the Airy recursion runs on one amplitude with real Fresnel
+/// coefficients `(n₁ − n₂)/(n₁ + n₂)` and phases `2π n d / λ` (the multicoat's design
+/// evaluates it hundreds of thousands of times a glass).
 pub fn reflectance_from_air(layers: &[CoatingLayer], substrate: f64, lambda_nm: f64) -> f64 {
-    stack_reflectance(1.0, substrate, layers, 1.0, lambda_nm, true)
+    let fresnel = |a: f64, b: f64| (a - b) / (a + b);
+    let Some(last) = layers.last() else {
+        return fresnel(1.0, substrate).powi(2);
+    };
+    // Γ from the substrate outward: Γ ← (r + Γ e^{−2iδ}) / (1 + r Γ e^{−2iδ}).
+    let (mut re, mut im) = (fresnel(last.index, substrate), 0.0);
+    for (k, layer) in layers.iter().enumerate().rev() {
+        let n_left = if k == 0 { 1.0 } else { layers[k - 1].index };
+        let r = fresnel(n_left, layer.index);
+        let delta = 2.0 * PI * layer.index * layer.thickness_nm / lambda_nm;
+        let (sin, cos) = (2.0 * delta).sin_cos();
+        // g = Γ e^{−2iδ}
+        let (gr, gi) = (re * cos + im * sin, im * cos - re * sin);
+        let (nr, ni) = (r + gr, gi);
+        let (dr, di) = (1.0 + r * gr, r * gi);
+        let d2 = dr * dr + di * di;
+        (re, im) = ((nr * dr + ni * di) / d2, (ni * dr - nr * di) / d2);
+    }
+    re * re + im * im
 }
 
 /// The two-layer V-coat (MgF₂ over ZrO₂) nulling the normal reflectance at [`DESIGN_NM`] on

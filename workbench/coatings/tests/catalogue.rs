@@ -124,3 +124,36 @@ fn multicoat_beats_one_layer_and_agrees_with_the_matrix_method() {
     }
     assert!(matches!(Design::Uncoated.coating(1.5, true), Coating::None));
 }
+
+/// The designs' normal-incidence recursion is the SDK's general one (both polarisations,
+/// any angle) at normal incidence, on stacks of 0–7 layers of any of the films.
+#[test]
+fn the_normal_incidence_reflectance_is_the_sdks_at_normal_incidence() {
+    use flarebench_sdk::coating::{CoatingLayer, stack_reflectance};
+    let films = [1.38, 1.46, 1.62, 2.05, 2.35];
+    let mut state = 0x2545_f491_4f6c_dd1d_u64;
+    let mut next = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for count in 0..8 {
+        for _ in 0..20 {
+            let layers: Vec<CoatingLayer> = (0..count)
+                .map(|_| CoatingLayer {
+                    index: films[(next() * films.len() as f64) as usize % films.len()],
+                    thickness_nm: 5.0 + 295.0 * next(),
+                })
+                .collect();
+            let ns = 1.45 + 0.6 * next();
+            let nm = 400.0 + 300.0 * next();
+            let ours = reflectance_from_air(&layers, ns, nm);
+            let sdk = stack_reflectance(1.0, ns, &layers, 1.0, nm, true);
+            assert!(
+                (ours - sdk).abs() < 1e-13,
+                "{count} layers: {ours} vs {sdk}"
+            );
+        }
+    }
+}
