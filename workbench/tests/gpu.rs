@@ -42,10 +42,15 @@ fn the_gpu_renders_the_cpu_image_and_reports_its_adapter() {
     let tmp = temp_dir("gpu");
     for extra in [
         &[][..],
-        &["--band-by-band"][..],
-        &["--iris-blades", "6"][..],
-        // The sensor stack's ghosts (the 3° light's reach the sensor) drawn by both.
-        &["--sensor-stack", "digital"][..],
+        // Every band on its own, through a six-bladed iris, with the sensor stack's ghosts
+        // (the 3° light's reach the sensor), drawn by both.
+        &[
+            "--band-by-band",
+            "--iris-blades",
+            "6",
+            "--sensor-stack",
+            "digital",
+        ][..],
     ] {
         let (cpu_path, gpu_path) = (tmp.path().join("cpu.exr"), tmp.path().join("gpu.exr"));
         let cpu_report = render("cpu", &cpu_path, extra);

@@ -8,7 +8,7 @@ use serde_json::Value;
 fn sweep(dir: &std::path::Path, extra: &[&str]) -> std::process::Output {
     let mut args = vec![
         "sweep",
-        "heliar-tronnier",
+        "cooke-triplet-25mm",
         "--light",
         "8,60",
         "--size",
@@ -44,7 +44,7 @@ fn a_sweep_writes_tables_plots_sheets_and_a_page_and_resumes_from_its_cache() {
     assert_eq!(v["cells_run"], 4);
     assert_eq!(v["references_rendered"], 1);
     let case = &v["cases"][0];
-    assert_eq!(case["case"]["lens"], "heliar-tronnier");
+    assert_eq!(case["case"]["lens"], "cooke-triplet-25mm");
     let cells = case["cells"].as_array().unwrap();
     // Two algorithms, and grid_scale varied on the one that has it (ghost-matrix has not).
     let labels: Vec<&str> = cells.iter().map(|c| c["label"].as_str().unwrap()).collect();
@@ -97,17 +97,17 @@ fn a_sweep_writes_tables_plots_sheets_and_a_page_and_resumes_from_its_cache() {
     assert!(text("per_ghost.csv").lines().count() > 3 * 10);
     let html = text("index.html");
     for needle in [
-        "plot-heliar-tronnier-8-60.png",
-        "plot-heliar-tronnier-8-60.svg",
-        "contact-heliar-tronnier-8-60.png",
+        "plot-cooke-triplet-25mm-8-60.png",
+        "plot-cooke-triplet-25mm-8-60.svg",
+        "contact-cooke-triplet-25mm-8-60.png",
         "results.csv",
         "grid_scale=0.5",
     ] {
         assert!(html.contains(needle), "index.html lacks {needle}");
     }
     assert!(!html.contains("http://") && !html.contains("https://") && !html.contains("<script"));
-    assert!(text("plot-heliar-tronnier-8-60.svg").contains("<svg"));
-    let plot = image::open(dir.join("plot-heliar-tronnier-8-60.png"))
+    assert!(text("plot-cooke-triplet-25mm-8-60.svg").contains("<svg"));
+    let plot = image::open(dir.join("plot-cooke-triplet-25mm-8-60.png"))
         .unwrap()
         .to_rgb8();
     assert_eq!(plot.dimensions(), (960, 600));
@@ -117,7 +117,7 @@ fn a_sweep_writes_tables_plots_sheets_and_a_page_and_resumes_from_its_cache() {
         .filter(|p| p.0.iter().all(|&c| c < 128))
         .count();
     assert!(dark > 2000, "{dark} dark pixels");
-    let sheet = image::open(dir.join("contact-heliar-tronnier-8-60.png")).unwrap();
+    let sheet = image::open(dir.join("contact-cooke-triplet-25mm-8-60.png")).unwrap();
     assert!(sheet.width() > 5 * 64 && sheet.height() > 36);
 
     // Run again: every cell and the reference come from the cache.
@@ -147,7 +147,7 @@ fn a_sweep_refuses_an_unknown_parameter_or_value_before_running_anything() {
     let dir = tmp.path();
     let out = flarebench(&[
         "sweep",
-        "heliar-tronnier",
+        "cooke-triplet-25mm",
         "--vary",
         "grid_sclae=1,2",
         "-o",
@@ -161,7 +161,7 @@ fn a_sweep_refuses_an_unknown_parameter_or_value_before_running_anything() {
     );
     let out = flarebench(&[
         "sweep",
-        "heliar-tronnier",
+        "cooke-triplet-25mm",
         "--vary",
         "dim_budget=lots",
         "-o",
