@@ -2,7 +2,6 @@
 //! noise and a clipped light, fitted back.
 
 use flarebench_coatings::basis::{Basis, FIT_NODE_DEG};
-use flarebench_coatings::catalogue::Design;
 use flarebench_coatings::fit::{FitOptions, Target, fit, model_image};
 use flarebench_coatings::model::{CoatingModel, Family};
 use flarebench_coatings::reweight::Reweighter;
@@ -80,14 +79,35 @@ fn truth_energies(system: &LensSystem, frame: Frame, light: &LightSpec) -> Vec<(
     .0
 }
 
-fn recover(stem: &str, family: Family, seed: u64) {
+/// What a recovery case expects of the fit.
+#[derive(PartialEq)]
+enum Expect {
+    /// The ghosts the fit reports as constrained carry at least 90% of the light.
+    Identified,
+    /// The image may not identify the coatings: only the fitted image and the ghosts the fit
+    /// reports as constrained are checked.
+    MaybeUnidentified,
+}
+
+/// Renders `stem` with hidden random coatings of `family` (the stream `seed`) under `light`,
+/// adds noise and a clipped light, fits it back with `options`, and checks the fitted image
+/// within 1% relative RMSE of the truth over the counted pixels and every ghost the fit
+/// reports as constrained within 2% of its energy in the truth.
+fn recover(
+    stem: &str,
+    family: Family,
+    seed: u64,
+    light: &str,
+    options: &FitOptions,
+    expect: Expect,
+) {
     let lens = load_lens(stem);
     let mut rng = Rng(seed);
     let model = CoatingModel::new(&lens, |_| family).unwrap();
     let hidden = hidden_params(&model, &mut rng);
     let hidden_lens = model.apply(&hidden);
     let frame = Frame::across_film(160, 107, lens.film_width_mm);
-    let light = LightSpec::parse("12,30,40").unwrap();
+    let light = LightSpec::parse(light).unwrap();
     let clean = truth(&hidden_lens, frame, &light);
     // The light's own image: a disc of radius 3 px far brighter than the ghosts, clipped at
     // four times the ghosts' peak (as a sensor clips it) and masked; noise of 1% of the
@@ -184,14 +204,7 @@ fn recover(stem: &str, family: Family, seed: u64) {
         );
     }
     let t = std::time::Instant::now();
-    let found = fit(
-        &model,
-        &Aperture::Circular,
-        &light,
-        &target,
-        &FitOptions::default(),
-    )
-    .unwrap();
+    let found = fit(&model, &Aperture::Circular, &light, &target, options).unwrap();
     eprintln!(
         "{stem}: {} params, {} band images, fit {:.0} ms, basis {:.0} ms, {:.0} evaluations/s, rmse {:.4}, wall {:?}",
         found.params.len(),
@@ -232,7 +245,7 @@ fn recover(stem: &str, family: Family, seed: u64) {
     let total: f64 = hidden_energy.iter().map(|(_, e)| e).sum();
     let mut constrained = 0.0;
     let mut worst: f64 = 0.0;
-    for g in found.ghosts.iter().filter(|g| g.constrained) {
+    for g in &found.ghosts {
         let t = hidden_energy
             .iter()
             .find(|(p, _)| *p == g.path)
@@ -240,13 +253,17 @@ fn recover(stem: &str, family: Family, seed: u64) {
             .1;
         let e: f64 = g.energy.iter().sum();
         eprintln!(
-            "{stem} {}: energy {:+.4} of hidden {t:.4e}",
+            "{stem} {}: energy {:+.4} of the truth's {t:.4e}, relative σ {:.4}{}",
             g.path,
-            e / t - 1.0
+            e / t - 1.0,
+            g.relative_sigma,
+            if g.constrained { ", constrained" } else { "" }
         );
-        worst = worst.max((e / t - 1.0).abs());
-        assert!((e - t).abs() <= 0.02 * t, "{stem} {}: {e} vs {t}", g.path);
-        constrained += t;
+        if g.constrained {
+            worst = worst.max((e / t - 1.0).abs());
+            assert!((e - t).abs() <= 0.02 * t, "{stem} {}: {e} vs {t}", g.path);
+            constrained += t;
+        }
     }
     eprintln!(
         "{stem}: {} of {} ghosts constrained, carrying {:.4} of the light; worst energy error {worst:.4}; wall {:?}",
@@ -255,40 +272,54 @@ fn recover(stem: &str, family: Family, seed: u64) {
         constrained / total,
         t.elapsed()
     );
-    assert!(
-        constrained >= 0.9 * total,
-        "{stem}: {constrained} of {total}"
+    if expect == Expect::Identified {
+        assert!(
+            constrained >= 0.9 * total,
+            "{stem}: {constrained} of {total}"
+        );
+    }
+}
+
+#[test]
+#[ignore = "slow tier: a fit from 12 starts over three passes, 46 s; by default the fit of the Heliar's own coatings through `flarebench fit` (workbench/tests/fit.rs)"]
+fn heliar_single_layers_are_recovered() {
+    recover(
+        "heliar-tronnier",
+        Family::Single,
+        1,
+        "12,30,40",
+        &FitOptions::default(),
+        Expect::Identified,
     );
 }
 
 #[test]
-#[ignore = "slow tier: a fit from 12 starts over three passes, 15 s; by default the fit of the Heliar's own coatings through `flarebench fit` (workbench/tests/fit.rs)"]
-fn heliar_single_layers_are_recovered() {
-    recover("heliar-tronnier", Family::Single, 1);
+#[ignore = "slow tier: a fit from 12 starts over three passes on 714 band images, 95 s; by default the fit's basis on the Cooke triplet against the renderer"]
+fn cooke_triplet_single_layers_are_recovered() {
+    recover(
+        "cooke-triplet-25mm",
+        Family::Single,
+        2,
+        "12,30,40",
+        &FitOptions::default(),
+        Expect::Identified,
+    );
 }
 
+/// The 250 mm telephoto's model glasses do not disperse: its ghosts' colours are the coatings'
+/// alone, and one light's image does not tell its coatings from the light's colour. The fit
+/// reports that (the check: no ghost it calls constrained is off by more than 2%).
 #[test]
-#[ignore = "probe"]
-fn probe_cooke() {
-    recover("cooke-triplet-25mm", Family::Single, 2);
-}
-
-#[test]
-#[ignore = "probe"]
-fn probe_cooke_vcoat() {
-    recover("cooke-triplet-25mm", Family::Layers(Design::VCoat), 4);
-}
-
-#[test]
-#[ignore = "probe"]
-fn probe_heliar_vcoat() {
-    recover("heliar-tronnier", Family::Layers(Design::VCoat), 5);
-}
-
-#[test]
-#[ignore = "probe"]
-fn probe_double_gauss() {
-    recover("double-gauss-50mm", Family::Single, 3);
+#[ignore = "slow tier: a fit from 12 starts over three passes, 37 s; by default the fit's basis on the Cooke triplet against the renderer"]
+fn telephoto_coatings_the_image_cannot_identify_are_reported() {
+    recover(
+        "telephoto-250mm",
+        Family::Single,
+        6,
+        "3,30,40",
+        &FitOptions::default(),
+        Expect::MaybeUnidentified,
+    );
 }
 
 /// The basis re-weighted follows the renderer: for the coatings it was rendered with within
@@ -346,101 +377,29 @@ fn reweighted_follows_the_renderer(stem: &str, own_limit: f64, limit: f64) {
     }
 }
 
-/// The renderer's image at `bands` bands for every ghost (fine spectral sampling).
-fn fine_truth(system: &LensSystem, frame: Frame, light: &LightSpec, bands: usize) -> HdrImage {
-    let mut opts = PlanOptions::for_quality(Quality::Default, None);
-    opts.cull = false;
-    opts.bands = bands;
-    opts.min_bands = bands;
-    let plans = plan(system, std::slice::from_ref(light), &frame, &opts).unwrap();
-    render(system, &Aperture::Circular, frame, &plans)
-        .unwrap()
-        .0
-}
-
+/// The fit's basis ([`FIT_NODE_DEG`]) at the coatings it was rendered with follows the
+/// renderer to 0.3% on the Cooke triplet with strongly reflecting hidden single layers (the
+/// choice's coarser nodes, [`flarebench_coatings::basis::NODE_DEG`], to 0.5%): what lets the
+/// fit's refined passes, each at a basis of its solution's coatings, find the hidden coatings.
 #[test]
-#[ignore = "probe"]
-fn probe_agreement() {
-    for (stem, seed) in [
-        ("heliar-tronnier", 1),
-        ("cooke-triplet-25mm", 2),
-        ("double-gauss-50mm", 3),
-    ]
-    .into_iter()
-    .filter(|(s, _)| std::env::var("FLAREBENCH_PROBE_LENS").map_or(true, |l| l == *s))
-    {
-        let lens = load_lens(stem);
-        let model = CoatingModel::new(&lens, |_| Family::Single).unwrap();
-        let mut rng = Rng(seed);
-        let hidden = hidden_params(&model, &mut rng);
-        let h = model.apply(&hidden);
-        let frame = Frame::across_film(160, 107, lens.film_width_mm);
-        let light = LightSpec::parse("12,30,40").unwrap();
-        let t = std::time::Instant::now();
-        let coarse = truth(&h, frame, &light);
-        let tc = t.elapsed();
-        let mut fines = Vec::new();
-        for n in [16, 32, 64] {
-            let t = std::time::Instant::now();
-            fines.push((n, fine_truth(&h, frame, &light, n), t.elapsed()));
-        }
-        let t = std::time::Instant::now();
-        let basis = Basis::render_with_nodes(
-            &h,
-            &Aperture::Circular,
-            frame,
-            &light,
-            Quality::Default,
-            &FIT_NODE_DEG,
-        )
+fn the_fit_basis_follows_the_renderer_on_the_cooke_triplet() {
+    let lens = load_lens("cooke-triplet-25mm");
+    let model = CoatingModel::new(&lens, |_| Family::Single).unwrap();
+    let hidden = model.apply(&hidden_params(&model, &mut Rng(2)));
+    let frame = Frame::across_film(160, 107, lens.film_width_mm);
+    let light = LightSpec::parse("12,30,40").unwrap();
+    let basis = Basis::render_with_nodes(
+        &hidden,
+        &Aperture::Circular,
+        frame,
+        &light,
+        Quality::Default,
+        &FIT_NODE_DEG,
+    )
+    .unwrap();
+    let colours = Reweighter::new(&basis, &hidden).unwrap().colours(&hidden);
+    let err = model_image(&basis, &colours, [1.0; 3])
+        .relative_rmse(&truth(&hidden, frame, &light))
         .unwrap();
-        let tb = t.elapsed();
-        let rw = Reweighter::new(&basis, &h).unwrap();
-        let img = model_image(&basis, &rw.colours(&h), [1.0; 3]);
-        eprintln!(
-            "{stem}: coarse {tc:?}, basis {tb:?} ({} images); basis vs coarse {:.4}",
-            basis.band_count(),
-            img.relative_rmse(&coarse).unwrap()
-        );
-        let sum = |i: &HdrImage| -> f64 {
-            i.pixels
-                .iter()
-                .map(|p| p.iter().map(|&c| f64::from(c)).sum::<f64>())
-                .sum()
-        };
-        eprintln!(
-            "{stem}: sums coarse {:.6e} basis {:.6e} fine64 {:.6e}",
-            sum(&coarse),
-            sum(&img),
-            sum(&fines[2].1)
-        );
-        if std::env::var("FLAREBENCH_PROBE_FINE_BASIS").is_ok() {
-            let mut opts = PlanOptions::for_quality(Quality::Default, None);
-            opts.cull = false;
-            opts.bands = 16;
-            opts.min_bands = 16;
-            let t = std::time::Instant::now();
-            let fb =
-                Basis::render_planned(&h, &Aperture::Circular, frame, &light, &opts, &FIT_NODE_DEG)
-                    .unwrap();
-            let rw = Reweighter::new(&fb, &h).unwrap();
-            let fimg = model_image(&fb, &rw.colours(&h), [1.0; 3]);
-            eprintln!(
-                "{stem}: fine-16 basis ({} images, {:?}) vs fine16 {:.4}, vs fine64 {:.4}, vs coarse {:.4}",
-                fb.band_count(),
-                t.elapsed(),
-                fimg.relative_rmse(&fines[0].1).unwrap(),
-                fimg.relative_rmse(&fines[2].1).unwrap(),
-                fimg.relative_rmse(&coarse).unwrap()
-            );
-        }
-        for (n, f, tf) in &fines {
-            eprintln!(
-                "{stem}: fine {n} ({tf:?}): basis vs fine {:.4}, coarse vs fine {:.4}, fine vs fine64 {:.4}",
-                img.relative_rmse(f).unwrap(),
-                coarse.relative_rmse(f).unwrap(),
-                f.relative_rmse(&fines[2].1).unwrap()
-            );
-        }
-    }
+    assert!(err < 0.003, "{err}");
 }
