@@ -6,16 +6,17 @@
 //! at, each at the ray's angle there. Coatings change the factors, not the geometry. A coating's
 //! reflectance varies with the angle of incidence steeply near its minimum (a ghost of a fast
 //! lens meets its surfaces at 0–40°), so the basis keeps that variation: each band is rendered
-//! once per pair of hat functions of the two reflections' incidence cosines
-//! ([`NODE_DEG`], the fit's [`FIT_NODE_DEG`]: piecewise linear in `cos² θ`, one at a node and zero at the next), their sum
-//! being the
-//! ghost's image with both reflectances replaced by their interpolation between the nodes.
+//! once per pair of hat functions of the two reflections' incidence cosines (nodes
+//! [`NODE_DEG`] for the choice, [`FIT_NODE_DEG`] for the fit: piecewise linear in `cos² θ`, one
+//! at a node and zero at the next), their sum being the ghost's image with both reflectances
+//! replaced by their interpolation between the nodes.
 //! Divided by the path's transmission at normal incidence at the band's centre, each such
 //! image times `Σ w(λ) T(λ) R₁(θᵢ, λ) R₂(θⱼ, λ)` over the band's bin (the light's weights,
 //! the path's normal transmission and the two reflectances at the pair's nodes, in 5 nm
 //! cells: `crate::reweight`) is the ghost's image under other coatings. What is left out is
 //! how the transmittances vary with the angle, which moves a ghost's light by a fraction of
-//! the surfaces' reflectance changes. [`Basis::render`] renders the images once (every ghost
+//! the surfaces' reflectance changes; at the coatings the basis is rendered with, the
+//! interpolation between the nodes is what is left. [`Basis::render`] renders the images once (every ghost
 //! with light, none culled as dim: a ghost dim under one set of coatings may be bright under
 //! another); a fit or a choice of coatings then costs a few products per image, not a render.
 
