@@ -326,12 +326,12 @@ fn telephoto_coatings_the_image_cannot_identify_are_reported() {
     );
 }
 
-/// The basis re-weighted follows the renderer: for the coatings it was rendered with within
-/// 1–2% (the renderer applies a ray's angle factor at its band's centre to the whole band, the
-/// basis its reflectances' at every 5 nm), and for other coatings within what the angle split
-/// leaves out besides (the transmittances' variation with the angle): on the Heliar and the
-/// double Gauss, from their own coatings and from MgF₂ everywhere to random single layers, at
-/// 12° (and 3° on the Heliar).
+/// The basis re-weighted (the choice's nodes) follows the renderer: for the coatings it was
+/// rendered with within 1% on the Heliar and 2% on the double Gauss (the reflectances'
+/// interpolation between the nodes; docs/coatings.md has the figures), and for other coatings
+/// within what the angle split leaves out besides (the transmittances' variation with the
+/// angle): on the Heliar and the double Gauss, from their own coatings and from MgF₂
+/// everywhere to random single layers, at 12° (and 3° on the Heliar).
 #[test]
 fn the_basis_reweighted_follows_the_renderer() {
     reweighted_follows_the_renderer("heliar-tronnier", 0.01, 0.01);
