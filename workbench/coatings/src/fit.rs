@@ -29,7 +29,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::CoatingError;
-use crate::basis::Basis;
+use crate::basis::{Basis, FIT_NODE_DEG};
 use crate::model::{CoatingModel, Family, ghost_energies};
 use crate::reweight::Reweighter;
 use crate::solve::{Bound, Minimum, jacobian_at, minimise};
@@ -88,6 +88,8 @@ pub struct FitOptions {
     /// Start from these parameters (coatings, then the gains when fitted) instead, without
     /// the scan.
     pub initial: Option<Vec<f64>>,
+    /// The angles (degrees) of the basis's hat nodes (`crate::basis`).
+    pub node_deg: Vec<f64>,
 }
 
 impl Default for FitOptions {
@@ -100,6 +102,7 @@ impl Default for FitOptions {
             spread_starts: 8,
             candidates: 3,
             initial: None,
+            node_deg: FIT_NODE_DEG.to_vec(),
         }
     }
 }
@@ -493,7 +496,14 @@ pub fn fit(
             Some(p) => model.apply(&p[..model.len()]),
             None => model.system().clone(),
         };
-        let basis = Basis::render(&system, aperture, frame, light, options.quality)?;
+        let basis = Basis::render_with_nodes(
+            &system,
+            aperture,
+            frame,
+            light,
+            options.quality,
+            &options.node_deg,
+        )?;
         basis_ms += t0.elapsed().as_secs_f64() * 1e3;
         renders += 1;
         let t1 = std::time::Instant::now();

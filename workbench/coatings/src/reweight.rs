@@ -10,7 +10,7 @@ use flarebench_sdk::system::SurfaceKind;
 use ghost_raytrace::colour::Bin;
 
 use crate::CoatingError;
-use crate::basis::{Basis, node_cos};
+use crate::basis::Basis;
 
 /// Cells the colours are integrated over: 5 nm over 380–780 nm, as the renderer's.
 const CELLS: usize = 80;
@@ -50,6 +50,8 @@ pub struct Reweighter {
     cells: Vec<(f64, [f64; 3])>,
     /// Each cell's media indices (coatings do not change them).
     indices: Vec<Vec<f64>>,
+    /// The basis's nodes' cosines.
+    nodes: Vec<f64>,
     /// Per surface and direction (forward, backward): the hat nodes some image uses.
     used: Vec<[Vec<bool>; 2]>,
     paths: Vec<GhostPath>,
@@ -93,7 +95,10 @@ impl Reweighter {
             .map(|&l| system.indices(l))
             .collect();
         let mut used = vec![
-            [vec![false; node_cos().len()], vec![false; node_cos().len()]];
+            [
+                vec![false; basis.nodes.len()],
+                vec![false; basis.nodes.len()]
+            ];
             system.surfaces.len()
         ];
         for r in &recipes {
@@ -102,6 +107,7 @@ impl Reweighter {
             used[path.second()][1][r.hats.1] = true;
         }
         Ok(Reweighter {
+            nodes: basis.nodes.clone(),
             cells,
             indices,
             used,
@@ -113,7 +119,7 @@ impl Reweighter {
     /// Every band image's colour under `system`'s coatings, in the basis's order.
     pub fn colours(&self, system: &LensSystem) -> Vec<[f64; 3]> {
         let sensor = system.sensor_index();
-        let nodes = node_cos();
+        let nodes = &self.nodes;
         let indices = &self.indices;
         // Normal-incidence factors per cell and surface (`colour::surface_factors`, from the
         // held indices).

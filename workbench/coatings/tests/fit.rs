@@ -1,16 +1,16 @@
 //! Synthetic recovery: a lens's flare rendered by the ghost renderer with hidden coatings,
 //! noise and a clipped light, fitted back.
 
-use flarebench_coatings::basis::Basis;
+use flarebench_coatings::basis::{Basis, FIT_NODE_DEG};
 use flarebench_coatings::fit::{FitOptions, Target, fit, model_image};
-use flarebench_coatings::model::{CoatingModel, Family, ghost_energies};
+use flarebench_coatings::model::{CoatingModel, Family};
 use flarebench_coatings::reweight::Reweighter;
 use flarebench_sdk::LensSystem;
 use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::frame::Frame;
 use flarebench_sdk::image::HdrImage;
 use flarebench_test_support::load_lens;
-use ghost_raytrace::ghosts::render;
+use ghost_raytrace::ghosts::{RenderOptions, render, render_each_ghost};
 use ghost_raytrace::plan::{PlanOptions, plan};
 use ghost_raytrace::scene::{LightSpec, Quality};
 
@@ -54,14 +54,60 @@ fn truth(system: &LensSystem, frame: Frame, light: &LightSpec) -> HdrImage {
         .0
 }
 
-fn recover(stem: &str, family: Family, seed: u64) {
+/// Each ghost's energy in the renderer's image of `system` (as [`truth`] plans it): the ghost
+/// rendered alone, summed over the frame and the channels.
+fn truth_energies(system: &LensSystem, frame: Frame, light: &LightSpec) -> Vec<(String, f64)> {
+    let mut opts = PlanOptions::for_quality(Quality::Default, None);
+    opts.cull = false;
+    let plans = plan(system, std::slice::from_ref(light), &frame, &opts).unwrap();
+    render_each_ghost(
+        system,
+        &Aperture::Circular,
+        frame,
+        &plans,
+        RenderOptions::default(),
+        |_, job, img| {
+            let e = img
+                .pixels
+                .iter()
+                .map(|p| p.iter().map(|&c| f64::from(c)).sum::<f64>())
+                .sum::<f64>();
+            (job.path.to_string(), e)
+        },
+    )
+    .unwrap()
+    .0
+}
+
+/// What a recovery case expects of the fit.
+#[derive(PartialEq)]
+enum Expect {
+    /// The ghosts the fit reports as constrained carry at least 90% of the light.
+    Identified,
+    /// The image may not identify the coatings: only the fitted image and the ghosts the fit
+    /// reports as constrained are checked.
+    MaybeUnidentified,
+}
+
+/// Renders `stem` with hidden random coatings of `family` (the stream `seed`) under `light`,
+/// adds noise and a clipped light, fits it back with `options`, and checks the fitted image
+/// within 1% relative RMSE of the truth over the counted pixels and every ghost the fit
+/// reports as constrained within 2% of its energy in the truth.
+fn recover(
+    stem: &str,
+    family: Family,
+    seed: u64,
+    light: &str,
+    options: &FitOptions,
+    expect: Expect,
+) {
     let lens = load_lens(stem);
     let mut rng = Rng(seed);
     let model = CoatingModel::new(&lens, |_| family).unwrap();
     let hidden = hidden_params(&model, &mut rng);
     let hidden_lens = model.apply(&hidden);
     let frame = Frame::across_film(160, 107, lens.film_width_mm);
-    let light = LightSpec::parse("12,30,40").unwrap();
+    let light = LightSpec::parse(light).unwrap();
     let clean = truth(&hidden_lens, frame, &light);
     // The light's own image: a disc of radius 3 px far brighter than the ghosts, clipped at
     // four times the ghosts' peak (as a sensor clips it) and masked; noise of 1% of the
@@ -118,6 +164,37 @@ fn recover(stem: &str, family: Family, seed: u64) {
         )
         .unwrap();
         let f = truth(&from_truth.system, frame, &light);
+        let b = Basis::render_with_nodes(
+            &from_truth.system,
+            &Aperture::Circular,
+            frame,
+            &light,
+            Quality::Default,
+            &FIT_NODE_DEG,
+        )
+        .unwrap();
+        let m = model_image(
+            &b,
+            &Reweighter::new(&b, &from_truth.system)
+                .unwrap()
+                .colours(&from_truth.system),
+            from_truth.gains,
+        );
+        let g1 = model_image(
+            &b,
+            &Reweighter::new(&b, &from_truth.system)
+                .unwrap()
+                .colours(&from_truth.system),
+            [1.0; 3],
+        );
+        eprintln!(
+            "{stem}: hidden {hidden:?}\n model vs clean {:.4}, model vs render {:.4}, fresh model vs render {:.4}, fresh model gains 1 vs render {:.4}, fresh vs fit model {:.4}",
+            from_truth.image.relative_rmse(&clean).unwrap(),
+            from_truth.image.relative_rmse(&f).unwrap(),
+            m.relative_rmse(&f).unwrap(),
+            g1.relative_rmse(&f).unwrap(),
+            m.relative_rmse(&from_truth.image).unwrap(),
+        );
         eprintln!(
             "{stem}: from the truth: residual² {:.6e}, rmse {:.4}, render vs truth {:.4}, params {:?}",
             from_truth.residual_sq,
@@ -127,14 +204,7 @@ fn recover(stem: &str, family: Family, seed: u64) {
         );
     }
     let t = std::time::Instant::now();
-    let found = fit(
-        &model,
-        &Aperture::Circular,
-        &light,
-        &target,
-        &FitOptions::default(),
-    )
-    .unwrap();
+    let found = fit(&model, &Aperture::Circular, &light, &target, options).unwrap();
     eprintln!(
         "{stem}: {} params, {} band images, fit {:.0} ms, basis {:.0} ms, {:.0} evaluations/s, rmse {:.4}, wall {:?}",
         found.params.len(),
@@ -145,7 +215,14 @@ fn recover(stem: &str, family: Family, seed: u64) {
         found.relative_rmse,
         t.elapsed()
     );
-    let fitted = truth(&found.system, frame, &light);
+    // The fitted image: the fitted lens rendered again under the fitted light (its gains, the
+    // light's intensity and colour as the fit found them).
+    let mut fitted = truth(&found.system, frame, &light);
+    for p in fitted.pixels.iter_mut() {
+        for (c, g) in p.iter_mut().zip(found.gains) {
+            *c *= g as f32;
+        }
+    }
     let counted = |img: &HdrImage| -> HdrImage {
         let mut out = img.clone();
         for (p, &m) in out.pixels.iter_mut().zip(&target.mask) {
@@ -157,71 +234,104 @@ fn recover(stem: &str, family: Family, seed: u64) {
     };
     let rmse = counted(&fitted).relative_rmse(&counted(&clean)).unwrap();
     eprintln!(
-        "{stem}: fitted lens rendered against the truth, over the counted pixels: {rmse:.4}; residual² {:.6e} params {:?}",
+        "{stem}: fitted image against the truth, over the counted pixels: {rmse:.4}; residual² {:.6e}\n hidden {hidden:?}\n found {:?}",
         found.residual_sq, found.raw
     );
     assert!(rmse < 0.01, "{stem}: {rmse}");
-    // Every ghost the fit reports as constrained within 2% of its hidden energy (a basis
-    // rendered with the hidden coatings gives that exactly), and those ghosts carry nearly
-    // all the light.
-    let basis = Basis::render(
-        &hidden_lens,
-        &Aperture::Circular,
-        frame,
-        &light,
-        Quality::Default,
-    )
-    .unwrap();
-    let colours = Reweighter::new(&basis, &hidden_lens)
-        .unwrap()
-        .colours(&hidden_lens);
-    let hidden_energy = ghost_energies(&basis, &colours, [1.0; 3]);
-    let total: f64 = hidden_energy.iter().map(|e| e.iter().sum::<f64>()).sum();
+    // Every ghost the fit reports as constrained within 2% of its energy in the truth (the
+    // renderer's image of it alone, summed over the frame and the channels), and those ghosts
+    // carry nearly all the light.
+    let hidden_energy = truth_energies(&hidden_lens, frame, &light);
+    let total: f64 = hidden_energy.iter().map(|(_, e)| e).sum();
     let mut constrained = 0.0;
-    for g in found.ghosts.iter().filter(|g| g.constrained) {
-        let k = basis
-            .ghosts
+    let mut worst: f64 = 0.0;
+    for g in &found.ghosts {
+        let t = hidden_energy
             .iter()
-            .position(|h| h.path.to_string() == g.path)
-            .expect("the same ghosts");
-        let (e, t): (f64, f64) = (g.energy.iter().sum(), hidden_energy[k].iter().sum());
-        assert!((e - t).abs() <= 0.02 * t, "{stem} {}: {e} vs {t}", g.path);
-        constrained += t;
+            .find(|(p, _)| *p == g.path)
+            .expect("the same ghosts")
+            .1;
+        let e: f64 = g.energy.iter().sum();
+        eprintln!(
+            "{stem} {}: energy {:+.4} of the truth's {t:.4e}, relative σ {:.4}{}",
+            g.path,
+            e / t - 1.0,
+            g.relative_sigma,
+            if g.constrained { ", constrained" } else { "" }
+        );
+        if g.constrained {
+            worst = worst.max((e / t - 1.0).abs());
+            assert!((e - t).abs() <= 0.02 * t, "{stem} {}: {e} vs {t}", g.path);
+            constrained += t;
+        }
     }
     eprintln!(
-        "{stem}: constrained ghosts carry {:.4} of the light",
-        constrained / total
+        "{stem}: {} of {} ghosts constrained, carrying {:.4} of the light; worst energy error {worst:.4}; wall {:?}",
+        found.ghosts.iter().filter(|g| g.constrained).count(),
+        found.ghosts.len(),
+        constrained / total,
+        t.elapsed()
     );
-    assert!(
-        constrained >= 0.9 * total,
-        "{stem}: {constrained} of {total}"
-    );
+    if expect == Expect::Identified {
+        assert!(
+            constrained >= 0.9 * total,
+            "{stem}: {constrained} of {total}"
+        );
+    }
 }
 
 #[test]
-#[ignore = "slow tier: a fit from 12 starts over three passes, 15 s; by default the fit of the Heliar's own coatings through `flarebench fit` (workbench/tests/fit.rs)"]
+#[ignore = "slow tier: a fit from 12 starts over three passes, 46 s; by default the fit of the Heliar's own coatings through `flarebench fit` (workbench/tests/fit.rs)"]
 fn heliar_single_layers_are_recovered() {
-    recover("heliar-tronnier", Family::Single, 1);
+    recover(
+        "heliar-tronnier",
+        Family::Single,
+        1,
+        "12,30,40",
+        &FitOptions::default(),
+        Expect::Identified,
+    );
 }
 
 #[test]
-#[ignore = "probe"]
-fn probe_cooke() {
-    recover("cooke-triplet-25mm", Family::Single, 2);
+#[ignore = "slow tier: a fit from 8 starts, its two best refined, on 714 band images, 70 s; by default the fit's basis on the Cooke triplet against the renderer"]
+fn cooke_triplet_single_layers_are_recovered() {
+    recover(
+        "cooke-triplet-25mm",
+        Family::Single,
+        2,
+        "12,30,40",
+        &FitOptions {
+            spread_starts: 4,
+            candidates: 2,
+            ..FitOptions::default()
+        },
+        Expect::Identified,
+    );
 }
 
+/// The 250 mm telephoto's model glasses do not disperse: its ghosts' colours are the coatings'
+/// alone, and one light's image does not tell its coatings from the light's colour. The fit
+/// reports that (the check: no ghost it calls constrained is off by more than 2%).
 #[test]
-#[ignore = "probe"]
-fn probe_double_gauss() {
-    recover("double-gauss-50mm", Family::Single, 3);
+#[ignore = "slow tier: a fit from 12 starts over three passes, 37 s; by default the fit's basis on the Cooke triplet against the renderer"]
+fn telephoto_coatings_the_image_cannot_identify_are_reported() {
+    recover(
+        "telephoto-250mm",
+        Family::Single,
+        6,
+        "3,30,40",
+        &FitOptions::default(),
+        Expect::MaybeUnidentified,
+    );
 }
 
-/// The basis re-weighted follows the renderer: for the coatings it was rendered with within
-/// 1–2% (the renderer applies a ray's angle factor at its band's centre to the whole band, the
-/// basis its reflectances' at every 5 nm), and for other coatings within what the angle split
-/// leaves out besides (the transmittances' variation with the angle): on the Heliar and the
-/// double Gauss, from their own coatings and from MgF₂ everywhere to random single layers, at
-/// 12° (and 3° on the Heliar).
+/// The basis re-weighted (the choice's nodes) follows the renderer: for the coatings it was
+/// rendered with within 1% on the Heliar and 2% on the double Gauss (the reflectances'
+/// interpolation between the nodes; docs/coatings.md has the figures), and for other coatings
+/// within what the angle split leaves out besides (the transmittances' variation with the
+/// angle): on the Heliar and the double Gauss, from their own coatings and from MgF₂
+/// everywhere to random single layers, at 12° (and 3° on the Heliar).
 #[test]
 fn the_basis_reweighted_follows_the_renderer() {
     reweighted_follows_the_renderer("heliar-tronnier", 0.01, 0.01);
@@ -269,4 +379,31 @@ fn reweighted_follows_the_renderer(stem: &str, own_limit: f64, limit: f64) {
             }
         }
     }
+}
+
+/// The fit's basis ([`FIT_NODE_DEG`]) at the coatings it was rendered with follows the
+/// renderer to 0.3% on the Cooke triplet with strongly reflecting hidden single layers (the
+/// choice's coarser nodes, [`flarebench_coatings::basis::NODE_DEG`], to 0.5%): what lets the
+/// fit's refined passes, each at a basis of its solution's coatings, find the hidden coatings.
+#[test]
+fn the_fit_basis_follows_the_renderer_on_the_cooke_triplet() {
+    let lens = load_lens("cooke-triplet-25mm");
+    let model = CoatingModel::new(&lens, |_| Family::Single).unwrap();
+    let hidden = model.apply(&hidden_params(&model, &mut Rng(2)));
+    let frame = Frame::across_film(160, 107, lens.film_width_mm);
+    let light = LightSpec::parse("12,30,40").unwrap();
+    let basis = Basis::render_with_nodes(
+        &hidden,
+        &Aperture::Circular,
+        frame,
+        &light,
+        Quality::Default,
+        &FIT_NODE_DEG,
+    )
+    .unwrap();
+    let colours = Reweighter::new(&basis, &hidden).unwrap().colours(&hidden);
+    let err = model_image(&basis, &colours, [1.0; 3])
+        .relative_rmse(&truth(&hidden, frame, &light))
+        .unwrap();
+    assert!(err < 0.003, "{err}");
 }
