@@ -93,6 +93,22 @@ enum Expect {
 /// adds noise and a clipped light, fits it back with `options`, and checks the fitted image
 /// within 1% relative RMSE of the truth over the counted pixels and every ghost the fit
 /// reports as constrained within 2% of its energy in the truth.
+/// The fit's basis ([`FIT_NODE_DEG`]) of `system` under `light`, and its band images' colours
+/// under the coatings it was rendered with.
+fn fit_basis(system: &LensSystem, frame: Frame, light: &LightSpec) -> (Basis, Vec<[f64; 3]>) {
+    let basis = Basis::render_with_nodes(
+        system,
+        &Aperture::Circular,
+        frame,
+        light,
+        Quality::Default,
+        &FIT_NODE_DEG,
+    )
+    .unwrap();
+    let colours = Reweighter::new(&basis, system).unwrap().colours(system);
+    (basis, colours)
+}
+
 fn recover(
     stem: &str,
     family: Family,
@@ -164,29 +180,9 @@ fn recover(
         )
         .unwrap();
         let f = truth(&from_truth.system, frame, &light);
-        let b = Basis::render_with_nodes(
-            &from_truth.system,
-            &Aperture::Circular,
-            frame,
-            &light,
-            Quality::Default,
-            &FIT_NODE_DEG,
-        )
-        .unwrap();
-        let m = model_image(
-            &b,
-            &Reweighter::new(&b, &from_truth.system)
-                .unwrap()
-                .colours(&from_truth.system),
-            from_truth.gains,
-        );
-        let g1 = model_image(
-            &b,
-            &Reweighter::new(&b, &from_truth.system)
-                .unwrap()
-                .colours(&from_truth.system),
-            [1.0; 3],
-        );
+        let (b, colours) = fit_basis(&from_truth.system, frame, &light);
+        let m = model_image(&b, &colours, from_truth.gains);
+        let g1 = model_image(&b, &colours, [1.0; 3]);
         eprintln!(
             "{stem}: hidden {hidden:?}\n model vs clean {:.4}, model vs render {:.4}, fresh model vs render {:.4}, fresh model gains 1 vs render {:.4}, fresh vs fit model {:.4}",
             from_truth.image.relative_rmse(&clean).unwrap(),
@@ -392,16 +388,7 @@ fn the_fit_basis_follows_the_renderer_on_the_cooke_triplet() {
     let hidden = model.apply(&hidden_params(&model, &mut Rng(2)));
     let frame = Frame::across_film(160, 107, lens.film_width_mm);
     let light = LightSpec::parse("12,30,40").unwrap();
-    let basis = Basis::render_with_nodes(
-        &hidden,
-        &Aperture::Circular,
-        frame,
-        &light,
-        Quality::Default,
-        &FIT_NODE_DEG,
-    )
-    .unwrap();
-    let colours = Reweighter::new(&basis, &hidden).unwrap().colours(&hidden);
+    let (basis, colours) = fit_basis(&hidden, frame, &light);
     let err = model_image(&basis, &colours, [1.0; 3])
         .relative_rmse(&truth(&hidden, frame, &light))
         .unwrap();
