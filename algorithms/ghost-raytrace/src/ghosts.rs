@@ -19,12 +19,13 @@ use flarebench_sdk::ghost::GridTrace;
 use flarebench_sdk::ghost::context::{BandRef, GhostContext, GhostGrid, GhostLight, GhostStats};
 use flarebench_sdk::ghost::fringe::mesh_ghost_fringed;
 use flarebench_sdk::ghost::mesh::GhostMesh;
-use flarebench_sdk::ghost::render::{mesh_ghost, rasterize_ghost_mesh_into, splat_ghost};
+use flarebench_sdk::ghost::render::{mesh_ghost, rasterize_ghost_mesh_with, splat_ghost};
 use flarebench_sdk::ghost::sink::{FrameLevels, GhostSink};
 use flarebench_sdk::image::{
     Blend, CoarseGrid, HdrImage, RowSpans, SpannedLevel, row_spans, upsample_spans_into,
 };
 use flarebench_sdk::paraxial::{analyse, stop_opening};
+use flarebench_sdk::raster::Coverage;
 use flarebench_sdk::spectrum::LAMBDA_D_NM;
 use rayon::prelude::*;
 
@@ -47,6 +48,13 @@ pub struct RenderOptions {
     /// upsampling pass writes every pixel, so a buffer kept from frame to frame (a live
     /// preview's, the bench's) needs no clearing first. The image is the same, bit for bit.
     pub replace: bool,
+    /// Rasterize every triangle with exact coverage ([`Coverage::Exact`]) instead of the
+    /// renderer's ([`FrameLevels::GHOSTS`]: large triangles point-sampled at pixel centres).
+    /// The image is then a continuous function of the meshes' vertices: a pixel centre lying
+    /// within a hair of an edge shared by two triangles of different brightness does not
+    /// change owner when a vertex moves by a rounding. `stability` compares f32 with f64
+    /// traces this way, so that the comparison measures the trace.
+    pub exact_coverage: bool,
 }
 
 /// Buffers a renderer keeps from frame to frame ([`render_into_reusing`]): the coarse frames,
@@ -312,7 +320,11 @@ pub fn draw_into(
         frame,
         grids: &grids,
         aperture,
-        coverage: FrameLevels::GHOSTS,
+        coverage: if options.exact_coverage {
+            Coverage::Exact
+        } else {
+            FrameLevels::GHOSTS
+        },
     });
     let per_ghost = render_groups(&ctxs, plans, &groups, options, sink);
     sink.finish();
@@ -366,6 +378,8 @@ pub(crate) struct Targets<'a> {
     out: &'a mut [[f32; 3]],
     width: usize,
     blend: Blend,
+    /// How the frame's triangles cover pixels (from [`FrameLevels::coverage`]).
+    coverage: Coverage,
     /// Each coarse frame's lit rows, once the upsampling pass has found them.
     spans: Option<Vec<RowSpans>>,
 }
@@ -388,6 +402,7 @@ impl<'a> Targets<'a> {
             out,
             width,
             blend: if replace { Blend::Replace } else { Blend::Add },
+            coverage: FrameLevels::GHOSTS,
             spans: None,
         }
     }
@@ -420,6 +435,7 @@ impl<'a> Targets<'a> {
 impl GhostSink for Targets<'_> {
     fn begin(&mut self, levels: FrameLevels<'_>) {
         self.grids = levels.grids.to_vec();
+        self.coverage = levels.coverage;
         let coarse_count = levels.coarse_count();
         self.coarse = self.grids[..coarse_count]
             .iter()
@@ -431,11 +447,12 @@ impl GhostSink for Targets<'_> {
     fn draw(&mut self, level: usize, mesh: &GhostMesh) {
         if level < self.coarse.len() {
             let width = self.grids[level].width;
-            rasterize_ghost_mesh_into(&mut self.coarse[level].pixels, width, mesh, self.aperture);
+            let pixels = &mut self.coarse[level].pixels;
+            rasterize_ghost_mesh_with(pixels, width, mesh, self.aperture, self.coverage);
         } else {
             // Every coarse ghost is drawn.
             self.upsample();
-            rasterize_ghost_mesh_into(self.out, self.width, mesh, self.aperture);
+            rasterize_ghost_mesh_with(self.out, self.width, mesh, self.aperture, self.coverage);
         }
     }
 

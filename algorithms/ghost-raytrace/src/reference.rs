@@ -33,6 +33,7 @@ const BAND_BY_BAND: ghosts::RenderOptions = ghosts::RenderOptions {
     trace_f64: false,
     band_by_band: true,
     replace: false,
+    exact_coverage: false,
 };
 
 /// The fewest wavelength bands a ghost of the reference is traced at.

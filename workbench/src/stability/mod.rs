@@ -150,7 +150,10 @@ pub struct PrecisionPair {
 }
 
 /// Renders the ghosts of a light at `theta_deg`, `phi_deg` through `aperture` in f32 and in
-/// f64 (the same plan).
+/// f64 (the same plan), every triangle with exact coverage: the renderer point-samples its
+/// large triangles, and a pixel centre within a hair of an edge shared by two triangles of
+/// different brightness takes either one's shade as a rounding moves the edge, so the
+/// sampled images' difference would measure where pixel centres fall, not the trace.
 pub fn render_pair(
     system: &LensSystem,
     aperture: &Aperture,
@@ -173,6 +176,7 @@ pub fn render_pair(
             &plans,
             RenderOptions {
                 trace_f64,
+                exact_coverage: true,
                 ..Default::default()
             },
         )
