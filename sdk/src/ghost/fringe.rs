@@ -1583,7 +1583,8 @@ mod tests {
                 let table = &tables[0];
                 let width = 1.0 / CORNER_STEPS as f32;
                 (0..CORNER_STEPS).fold([0.0; 3], |m, i| {
-                    let (lo, hi) = (table.share(i as f32 * width), table.share((i + 1) as f32 * width));
+                    let lo = table.share(i as f32 * width);
+                    let hi = table.share((i + 1) as f32 * width);
                     [0, 1, 2].map(|c| m[c].max((hi[c] - lo[c]).abs()))
                 })
             } else {
