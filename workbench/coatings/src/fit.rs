@@ -30,9 +30,9 @@ use serde::Serialize;
 
 use crate::CoatingError;
 use crate::basis::{Basis, FIT_NODE_DEG};
-use crate::model::{CoatingModel, Family, ghost_energies};
-use crate::reweight::Reweighter;
-use crate::solve::{Bound, Minimum, jacobian_at, minimise};
+use crate::model::{CoatingModel, Family, ModelSurface, ghost_energies};
+use crate::reweight::{Reweighter, SurfaceTerms};
+use crate::solve::{Bound, Minimum, Residuals, jacobian_at, minimise};
 
 /// Singular values of the scaled `JᵀJ` below this fraction of the largest mark directions the
 /// image does not constrain.
@@ -52,7 +52,7 @@ pub const MAX_RESCANS: usize = 2;
 /// Rounds of that scan over the surfaces.
 pub const SCAN_ROUNDS: usize = 2;
 
-fn surface_params(model: &CoatingModel, s: &crate::model::ModelSurface) -> usize {
+fn surface_params(model: &CoatingModel, s: &ModelSurface) -> usize {
     model
         .surfaces
         .iter()
@@ -173,13 +173,68 @@ pub struct Fit {
     pub raw: Vec<f64>,
 }
 
-/// The Gram system of a basis against a target: `Lᵀ` and `L⁻¹v` per channel.
+/// The Gram system of a basis against a target: `L` (lower triangular) and `L⁻¹v` per
+/// channel.
 struct Reduced {
-    lt: DMatrix<f64>,
+    l: DMatrix<f64>,
     z: [DVector<f64>; 3],
     /// `yᵀy − ‖z‖²` per channel: the squared residual no coefficients can remove.
     floor: f64,
     pixels: usize,
+}
+
+impl Reduced {
+    /// `Lᵀc` for each channel of the colours `c`: one pass over `L`'s columns (its stored
+    /// lower triangle only, each column contiguous), the three channels together.
+    fn lt_times(&self, c: &[[f64; 3]]) -> [Vec<f64>; 3] {
+        let n = self.l.nrows();
+        let l = self.l.as_slice();
+        let mut out = [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
+        for i in 0..n {
+            let col = &l[i * n + i..(i + 1) * n];
+            let (mut a, mut b, mut d) = (0.0, 0.0, 0.0);
+            for (&lji, cj) in col.iter().zip(&c[i..]) {
+                a += lji * cj[0];
+                b += lji * cj[1];
+                d += lji * cj[2];
+            }
+            out[0][i] = a;
+            out[1][i] = b;
+            out[2][i] = d;
+        }
+        out
+    }
+
+    /// The residuals `g Lᵀc − L⁻¹v`, channel after channel, from `lc = Lᵀc`.
+    fn residuals(&self, lc: &[Vec<f64>; 3], g: [f64; 3]) -> Vec<f64> {
+        let mut r = Vec::with_capacity(3 * lc[0].len());
+        for ch in 0..3 {
+            r.extend(
+                lc[ch]
+                    .iter()
+                    .zip(self.z[ch].iter())
+                    .map(|(a, z)| g[ch] * a - z),
+            );
+        }
+        r
+    }
+
+    /// Per channel, the gain that fits best for `lc = Lᵀc` (linear least squares).
+    fn best_gains(&self, lc: &[Vec<f64>; 3]) -> [f64; 3] {
+        std::array::from_fn(|ch| {
+            let num: f64 = lc[ch]
+                .iter()
+                .zip(self.z[ch].iter())
+                .map(|(a, z)| a * z)
+                .sum();
+            let den: f64 = lc[ch].iter().map(|a| a * a).sum();
+            if den > 0.0 && num > 0.0 {
+                num / den
+            } else {
+                1.0
+            }
+        })
+    }
 }
 
 fn reduce(basis: &Basis, target: &Target) -> Result<Reduced, CoatingError> {
@@ -253,14 +308,14 @@ fn reduce(basis: &Basis, target: &Target) -> Result<Reduced, CoatingError> {
             return Err(CoatingError::Colours);
         }
     };
-    let l = chol.l();
+    let l = chol.unpack();
     let z: [DVector<f64>; 3] = std::array::from_fn(|ch| {
         l.solve_lower_triangular(&v[ch])
             .unwrap_or_else(|| DVector::zeros(n))
     });
     let floor = yy - z.iter().map(|z| z.norm_squared()).sum::<f64>();
     Ok(Reduced {
-        lt: l.transpose(),
+        l,
         z,
         floor: floor.max(0.0),
         pixels: mask.iter().filter(|m| **m).count(),
@@ -300,14 +355,7 @@ impl Evaluator<'_> {
 
     /// The residuals of colours `c` (in the basis's order) under gains `g`.
     fn residuals_of(&self, c: &[[f64; 3]], g: [f64; 3]) -> Vec<f64> {
-        let n = self.reduced.z[0].len();
-        let mut r = Vec::with_capacity(3 * n);
-        for ch in 0..3 {
-            let cv = DVector::from_iterator(n, c.iter().map(|c| c[ch] * g[ch]));
-            let res = &self.reduced.lt * cv - &self.reduced.z[ch];
-            r.extend(res.iter());
-        }
-        r
+        self.reduced.residuals(&self.reduced.lt_times(c), g)
     }
 
     /// Half the squared residual at `p` with the gains that fit best there.
@@ -315,15 +363,48 @@ impl Evaluator<'_> {
         let Some(c) = self.colours(p) else {
             return f64::INFINITY;
         };
+        self.cost_of_colours(&c, p)
+    }
+
+    /// The colours of parameters `q` that differ from those of `system` (whose surfaces'
+    /// terms are `terms`) in surface `s`'s parameters only.
+    fn colours_moved(
+        &self,
+        system: &LensSystem,
+        terms: &[SurfaceTerms],
+        s: &ModelSurface,
+        q: &[f64],
+    ) -> Vec<[f64; 3]> {
+        let at = s.coatable.surface;
+        let mut surface = system.surfaces[at].clone();
+        surface.coating = self.model.coating(s, q);
+        let own = self.bins.surface_terms(at, &surface);
+        let refs: Vec<&SurfaceTerms> = terms
+            .iter()
+            .enumerate()
+            .map(|(i, t)| if i == at { &own } else { t })
+            .collect();
+        self.bins.colours_of(&refs, system.sensor_index())
+    }
+
+    /// Half the squared residual of colours `c` with the gains that fit best for them
+    /// (written into `p`'s gains).
+    fn cost_of_colours(&self, c: &[[f64; 3]], p: &mut [f64]) -> f64 {
+        let lc = self.reduced.lt_times(c);
         let g = if self.fit_gains {
-            let g = self.best_gains_of(&c);
+            let g = self.reduced.best_gains(&lc);
             let k = self.model.len();
             p[k..k + 3].copy_from_slice(&g);
             g
         } else {
             [1.0; 3]
         };
-        0.5 * self.residuals_of(&c, g).iter().map(|v| v * v).sum::<f64>()
+        0.5 * self
+            .reduced
+            .residuals(&lc, g)
+            .iter()
+            .map(|v| v * v)
+            .sum::<f64>()
     }
 
     /// A start improved surface by surface: each surface's parameters in turn over a grid
@@ -362,13 +443,16 @@ impl Evaluator<'_> {
                         .flat_map(|g| axis.iter().map(move |&v| [g.as_slice(), &[v]].concat()))
                         .collect();
                 }
+                // Only this surface's terms change across its grid.
+                let system = self.model.apply(&p);
+                let terms = self.bins.terms(&system);
                 let best = grid
                     .par_iter()
                     .map(|values| {
                         let mut q = p.clone();
                         q[range.clone()].copy_from_slice(values);
-                        let c = self.cost_with_best_gains(&mut q);
-                        (c, q)
+                        let c = self.colours_moved(&system, &terms, s, &q);
+                        (self.cost_of_colours(&c, &mut q), q)
                     })
                     .min_by(|a, b| a.0.total_cmp(&b.0));
                 if let Some((c, q)) = best.filter(|(c, _)| *c < cost) {
@@ -387,18 +471,61 @@ impl Evaluator<'_> {
 
     /// Per channel, the gains that fit best for colours `c`.
     fn best_gains_of(&self, c: &[[f64; 3]]) -> [f64; 3] {
+        self.reduced.best_gains(&self.reduced.lt_times(c))
+    }
+}
+
+impl Residuals for Evaluator<'_> {
+    fn residuals(&self, p: &[f64]) -> Vec<f64> {
+        Evaluator::residuals(self, p)
+    }
+
+    /// By central differences of steps [`Bound::step`], each coating parameter's column
+    /// from its own surface's terms (the other surfaces' held from `p`), the gains' columns
+    /// exactly (the residuals are linear in them).
+    fn jacobian(&self, p: &[f64], bounds: &[Bound]) -> Option<(DMatrix<f64>, usize)> {
+        let k = self.model.len();
+        let system = self.model.apply(&p[..k]);
+        let terms = self.bins.terms(&system);
+        let sensor = system.sensor_index();
+        let g = self.gains(p);
         let n = self.reduced.z[0].len();
-        std::array::from_fn(|ch| {
-            let cv = DVector::from_iterator(n, c.iter().map(|c| c[ch]));
-            let lc = &self.reduced.lt * cv;
-            let num = lc.dot(&self.reduced.z[ch]);
-            let den = lc.norm_squared();
-            if den > 0.0 && num > 0.0 {
-                num / den
-            } else {
-                1.0
-            }
-        })
+        let lc = if self.fit_gains {
+            let refs: Vec<&SurfaceTerms> = terms.iter().collect();
+            Some(self.reduced.lt_times(&self.bins.colours_of(&refs, sensor)))
+        } else {
+            None
+        };
+        let columns: Vec<Vec<f64>> = (0..p.len())
+            .into_par_iter()
+            .map(|j| {
+                if j >= k {
+                    let ch = j - k;
+                    let mut col = vec![0.0; 3 * n];
+                    if let Some(lc) = &lc {
+                        col[ch * n..(ch + 1) * n].copy_from_slice(&lc[ch]);
+                    }
+                    return col;
+                }
+                let s = self
+                    .model
+                    .surfaces
+                    .iter()
+                    .rfind(|s| s.offset <= j)
+                    .expect("a coating parameter belongs to a surface");
+                let h = bounds[j].step(p[j]);
+                let moved = |d: f64| {
+                    let mut q = p.to_vec();
+                    q[j] += d;
+                    let c = self.colours_moved(&system, &terms, s, &q);
+                    self.reduced.residuals(&self.reduced.lt_times(&c), g)
+                };
+                let (a, b) = (moved(h), moved(-h));
+                a.iter().zip(&b).map(|(a, b)| (a - b) / (2.0 * h)).collect()
+            })
+            .collect();
+        let jac = DMatrix::from_fn(3 * n, p.len(), |i, j| columns[j][i]);
+        Some((jac, 2 * k))
     }
 }
 
@@ -514,7 +641,6 @@ pub fn fit(
             basis: &basis,
             fit_gains: options.fit_gains,
         };
-        let f = |p: &[f64]| ev.residuals(p);
         let mut tried: Vec<Minimum> = starts_of(&ev)
             .into_par_iter()
             .enumerate()
@@ -524,7 +650,7 @@ pub fn fit(
                 } else {
                     s
                 };
-                minimise(&f, &s, &bounds)
+                minimise(&ev, &s, &bounds)
             })
             .collect();
         evaluations += tried.iter().map(|m| m.evaluations).sum::<usize>();
@@ -536,7 +662,7 @@ pub fn fit(
         // a valley of the joint problem that a surface's scan can leave.
         if scan {
             for _ in 0..MAX_RESCANS {
-                let again = minimise(&f, &ev.scan(tried[0].params.clone(), &bounds), &bounds);
+                let again = minimise(&ev, &ev.scan(tried[0].params.clone(), &bounds), &bounds);
                 evaluations += again.evaluations;
                 if again.cost >= tried[0].cost * (1.0 - 1e-6) {
                     break;
@@ -648,13 +774,12 @@ fn summarise(
                 .flatten(),
         )
         .collect();
-    let f = |q: &[f64]| ev.residuals(q);
-    let r = f(p);
+    let r = ev.residuals(p);
     let sq: f64 = r.iter().map(|v| v * v).sum::<f64>() + ev.reduced.floor;
     let dof = (3 * ev.reduced.pixels).saturating_sub(p.len()).max(1) as f64;
     let s2 = sq / dof;
     // Jacobian in parameters scaled by their ranges (or values), its SVD.
-    let jac = jacobian_at(&f, p, bounds);
+    let (jac, _) = Residuals::jacobian(ev, p, bounds).expect("the fit's Jacobian");
     let scale: Vec<f64> = bounds
         .iter()
         .zip(p)

@@ -3,10 +3,10 @@
 //! transmission at normal incidence times its two reflectances at the image's pair of hat
 //! nodes, times the light's intensity.
 
-use flarebench_sdk::LensSystem;
 use flarebench_sdk::color::{SAMPLING_MAX_NM, SAMPLING_MIN_NM, SpectralSampling};
 use flarebench_sdk::ghost::GhostPath;
 use flarebench_sdk::system::SurfaceKind;
+use flarebench_sdk::{LensSystem, Surface};
 use ghost_raytrace::colour::Bin;
 
 use crate::CoatingError;
@@ -118,88 +118,86 @@ impl Reweighter {
 
     /// Every band image's colour under `system`'s coatings, in the basis's order.
     pub fn colours(&self, system: &LensSystem) -> Vec<[f64; 3]> {
-        let sensor = system.sensor_index();
-        let nodes = &self.nodes;
+        let terms = self.terms(system);
+        let refs: Vec<&SurfaceTerms> = terms.iter().collect();
+        self.colours_of(&refs, system.sensor_index())
+    }
+
+    /// Every surface's terms under `system`'s coatings.
+    pub fn terms(&self, system: &LensSystem) -> Vec<SurfaceTerms> {
+        system
+            .surfaces
+            .iter()
+            .enumerate()
+            .map(|(s, surface)| self.surface_terms(s, surface))
+            .collect()
+    }
+
+    /// The terms of `surface`, the lens's surface `s`, under its coating: its
+    /// normal-incidence factors per cell (`colour::surface_factors`, from the held indices)
+    /// and, where a ghost reflects there, its reflectances per direction, hat node and cell.
+    pub fn surface_terms(&self, s: usize, surface: &Surface) -> SurfaceTerms {
         let indices = &self.indices;
-        // Normal-incidence factors per cell and surface (`colour::surface_factors`, from the
-        // held indices).
-        let factors: Vec<Vec<[f64; 4]>> = self
+        let factors = self
             .cells
             .iter()
             .zip(indices)
             .map(|(&(l, _), n)| {
-                system
-                    .surfaces
-                    .iter()
-                    .enumerate()
-                    .map(|(i, s)| {
-                        if s.kind != SurfaceKind::Refracting || n[i] == n[i + 1] {
-                            return [1.0, 0.0, 1.0, 0.0];
-                        }
-                        let rf = s.coating.reflectance(n[i], n[i + 1], 1.0, l, true);
-                        let rb = s.coating.reflectance(n[i + 1], n[i], 1.0, l, false);
-                        [1.0 - rf, rf, 1.0 - rb, rb]
-                    })
-                    .collect()
+                if surface.kind != SurfaceKind::Refracting || n[s] == n[s + 1] {
+                    return [1.0, 0.0, 1.0, 0.0];
+                }
+                let rf = surface.coating.reflectance(n[s], n[s + 1], 1.0, l, true);
+                let rb = surface.coating.reflectance(n[s + 1], n[s], 1.0, l, false);
+                [1.0 - rf, rf, 1.0 - rb, rb]
             })
             .collect();
-        // Each reflecting surface's reflectances, per direction, node and cell, once.
-        let mut refl: Vec<[Option<Vec<Vec<f64>>>; 2]> = vec![[None, None]; system.surfaces.len()];
-        for path in &self.paths {
-            for (s, dir) in [(path.first(), 0), (path.second(), 1)] {
-                if refl[s][dir].is_some() {
-                    continue;
-                }
-                let forward = dir == 0;
-                refl[s][dir] = Some(
-                    nodes
-                        .iter()
-                        .zip(&self.used[s][dir])
-                        .map(|(&c, &used)| {
-                            if !used {
-                                return Vec::new();
-                            }
-                            (0..CELLS)
-                                .map(|k| {
-                                    let n = &indices[k];
-                                    let (n1, n2) = if forward {
-                                        (n[s], n[s + 1])
-                                    } else {
-                                        (n[s + 1], n[s])
-                                    };
-                                    system.surfaces[s].coating.reflectance(
-                                        n1,
-                                        n2,
-                                        c,
-                                        self.cells[k].0,
-                                        forward,
-                                    )
-                                })
-                                .collect()
+        let refl = std::array::from_fn(|dir| {
+            let forward = dir == 0;
+            self.nodes
+                .iter()
+                .zip(&self.used[s][dir])
+                .map(|(&c, &used)| {
+                    if !used {
+                        return Vec::new();
+                    }
+                    (0..CELLS)
+                        .map(|k| {
+                            let n = &indices[k];
+                            let (n1, n2) = if forward {
+                                (n[s], n[s + 1])
+                            } else {
+                                (n[s + 1], n[s])
+                            };
+                            surface
+                                .coating
+                                .reflectance(n1, n2, c, self.cells[k].0, forward)
                         })
-                        .collect(),
-                );
+                        .collect()
+                })
+                .collect()
+        });
+        SurfaceTerms { factors, refl }
+    }
+
+    /// Every band image's colour from the surfaces' terms (one per surface, in order).
+    pub fn colours_of(&self, terms: &[&SurfaceTerms], sensor: usize) -> Vec<[f64; 3]> {
+        let mut f = vec![[1.0, 0.0, 1.0, 0.0]; terms.len()];
+        let mut transmissions = vec![[0.0; CELLS]; self.paths.len()];
+        for k in 0..CELLS {
+            for (fs, t) in f.iter_mut().zip(terms) {
+                *fs = t.factors[k];
+            }
+            for (t, &path) in transmissions.iter_mut().zip(&self.paths) {
+                t[k] = transmission(path, &f, sensor);
             }
         }
-        let transmissions: Vec<Vec<f64>> = self
-            .paths
-            .iter()
-            .map(|&path| {
-                factors
-                    .iter()
-                    .map(|f| transmission(path, f, sensor))
-                    .collect()
-            })
-            .collect();
         self.recipes
             .iter()
             .map(|rec| {
                 let path = self.paths[rec.ghost];
                 let t = &transmissions[rec.ghost];
-                let (Some(ra), Some(rb)) = (&refl[path.first()][0], &refl[path.second()][1]) else {
-                    return [0.0; 3];
-                };
-                let (r1, r2) = (&ra[rec.hats.0], &rb[rec.hats.1]);
+                let r1 = &terms[path.first()].refl[0][rec.hats.0];
+                let r2 = &terms[path.second()].refl[1][rec.hats.1];
                 let mut c = [0.0; 3];
                 for &(k, share) in &rec.cells {
                     let v = share * t[k] * r1[k] * r2[k];
@@ -211,4 +209,15 @@ impl Reweighter {
             })
             .collect()
     }
+}
+
+/// One surface's part in the colours under its coating ([`Reweighter::surface_terms`]): the
+/// colours of coatings that differ on one surface differ only in its terms.
+#[derive(Clone, Debug)]
+pub struct SurfaceTerms {
+    /// `[T forward, R forward, T backward, R backward]` at normal incidence, per cell.
+    factors: Vec<[f64; 4]>,
+    /// Reflectance per direction (forward, backward), hat node and cell; empty where no
+    /// ghost of the basis reflects so.
+    refl: [Vec<Vec<f64>>; 2],
 }

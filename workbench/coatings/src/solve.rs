@@ -3,7 +3,9 @@
 //! (forward differences, its columns computed in parallel).
 //!
 //! A parameter bounded to `[lo, hi]` is `lo + (hi − lo)(1 + sin u)/2` of a free `u` (the
-//! mapping MINUIT uses); a positive one is `e^u`. The solver sees only `u`.
+//! mapping MINUIT uses); a positive one is `e^u`. The solver sees only `u`. A problem that
+//! knows a cheaper way to its Jacobian than re-evaluating every residual per parameter gives
+//! it in the parameters themselves ([`Residuals::jacobian`]); the chain rule takes it to `u`.
 
 use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
 use nalgebra::{DMatrix, DVector, Dyn, Owned};
@@ -55,10 +57,25 @@ pub struct Minimum {
     pub converged: bool,
 }
 
-type Residuals<'a> = dyn Fn(&[f64]) -> Vec<f64> + Sync + 'a;
+/// A least-squares problem: residuals of parameters, and optionally their Jacobian.
+pub trait Residuals: Sync {
+    fn residuals(&self, p: &[f64]) -> Vec<f64>;
+
+    /// `∂r/∂p` at `p` (rows of residuals × columns of parameters), counted as this many
+    /// residual evaluations; `None` (the default) has the solver difference the residuals.
+    fn jacobian(&self, _p: &[f64], _bounds: &[Bound]) -> Option<(DMatrix<f64>, usize)> {
+        None
+    }
+}
+
+impl<F: Fn(&[f64]) -> Vec<f64> + Sync> Residuals for F {
+    fn residuals(&self, p: &[f64]) -> Vec<f64> {
+        self(p)
+    }
+}
 
 struct Problem<'a> {
-    f: &'a Residuals<'a>,
+    f: &'a dyn Residuals,
     bounds: &'a [Bound],
     u: DVector<f64>,
     evaluations: std::sync::atomic::AtomicUsize,
@@ -75,7 +92,7 @@ impl Problem<'_> {
     fn eval(&self, u: &[f64]) -> Vec<f64> {
         self.evaluations
             .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        (self.f)(&self.params_of(u))
+        self.f.residuals(&self.params_of(u))
     }
 }
 
@@ -102,6 +119,18 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_> {
     fn jacobian(&self) -> Option<DMatrix<f64>> {
         const H: f64 = 1e-6;
         let u = self.u.as_slice();
+        if let Some((mut jac, cost)) = self.f.jacobian(&self.params_of(u), self.bounds) {
+            self.evaluations
+                .fetch_add(cost, std::sync::atomic::Ordering::Relaxed);
+            for (j, (&u, b)) in u.iter().zip(self.bounds).enumerate() {
+                let dp_du = match *b {
+                    Bound::Range(lo, hi) => (hi - lo) * 0.5 * u.cos(),
+                    Bound::Positive => u.exp(),
+                };
+                jac.column_mut(j).scale_mut(dp_du);
+            }
+            return jac.iter().all(|v| v.is_finite()).then_some(jac);
+        }
         let columns: Vec<Vec<f64>> = (0..u.len())
             .into_par_iter()
             .map(|j| {
@@ -120,7 +149,7 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_> {
 }
 
 /// Minimises `½ Σ f(p)ᵢ²` over `p` within `bounds`, from `start` (clamped into the bounds).
-pub fn minimise(f: &Residuals<'_>, start: &[f64], bounds: &[Bound]) -> Minimum {
+pub fn minimise(f: &dyn Residuals, start: &[f64], bounds: &[Bound]) -> Minimum {
     let problem = Problem {
         f,
         bounds,
@@ -136,7 +165,7 @@ pub fn minimise(f: &Residuals<'_>, start: &[f64], bounds: &[Bound]) -> Minimum {
         .with_xtol(1e-9)
         .minimize(problem);
     let params = problem.params_of(problem.u.as_slice());
-    let r = f(&params);
+    let r = f.residuals(&params);
     Minimum {
         cost: 0.5 * r.iter().map(|v| v * v).sum::<f64>(),
         params,
@@ -148,7 +177,11 @@ pub fn minimise(f: &Residuals<'_>, start: &[f64], bounds: &[Bound]) -> Minimum {
 
 /// The Jacobian of `f` at `p` in the parameters themselves (central differences, each step
 /// [`Bound::step`]), as rows of residuals × columns of parameters.
-pub fn jacobian_at(f: &Residuals<'_>, p: &[f64], bounds: &[Bound]) -> DMatrix<f64> {
+pub fn jacobian_at(
+    f: &(dyn Fn(&[f64]) -> Vec<f64> + Sync),
+    p: &[f64],
+    bounds: &[Bound],
+) -> DMatrix<f64> {
     let columns: Vec<Vec<f64>> = (0..p.len())
         .into_par_iter()
         .map(|j| {
