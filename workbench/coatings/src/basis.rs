@@ -253,6 +253,45 @@ impl Basis {
     }
 }
 
+/// The ghost renderer's own image of a lens's ghosts, and each ghost's energy (summed over the
+/// frame, per channel), in plan order: what a basis approximates.
+#[derive(Clone, Debug)]
+pub struct Rendered {
+    pub image: HdrImage,
+    pub energies: Vec<(GhostPath, [f64; 3])>,
+}
+
+/// [`Rendered`] of `system`'s ghosts under `light`, planned as the basis is
+/// ([`Basis::render_with_nodes`]: every ghost with light, none culled).
+pub fn render_ghosts(
+    system: &LensSystem,
+    aperture: &Aperture,
+    frame: Frame,
+    light: &LightSpec,
+    quality: Quality,
+) -> Result<Rendered, CoatingError> {
+    let mut opts = PlanOptions::for_quality(quality, None);
+    opts.cull = false;
+    let plans = plan(system, std::slice::from_ref(light), &frame, &opts)?;
+    let (energies, image) = render_each_ghost(
+        system,
+        aperture,
+        frame,
+        &plans,
+        RenderOptions::default(),
+        |_, job, img| {
+            let mut e = [0.0; 3];
+            for p in &img.pixels {
+                for (e, &c) in e.iter_mut().zip(p) {
+                    *e += f64::from(c);
+                }
+            }
+            (job.path, e)
+        },
+    )?;
+    Ok(Rendered { image, energies })
+}
+
 /// The lit box of `img`'s first channel (every channel is the same: the band is drawn in a
 /// colour of one), or `None` when nothing is lit.
 fn crop(img: &HdrImage) -> Option<BandImage> {

@@ -29,7 +29,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::CoatingError;
-use crate::basis::{Basis, FIT_NODE_DEG};
+use crate::basis::{Basis, FIT_NODE_DEG, Rendered, render_ghosts};
 use crate::model::{CoatingModel, Family, ModelSurface, ghost_energies};
 use crate::reweight::{Reweighter, SurfaceTerms};
 use crate::solve::{Bound, Minimum, Residuals, jacobian_at, minimise};
@@ -46,6 +46,10 @@ pub const CONSTRAINED_ENERGY: f64 = 0.01;
 /// [`SCAN_STEPS`] (a single layer's index by its quarter-wave wavelength, 8 × 24).
 pub const SCAN_STEPS: usize = 12;
 const PRIMES: [u32; 16] = [2, 3, 5, 7, 11, 13, 17, 19, 23, 29, 31, 37, 41, 43, 47, 53];
+
+/// A defect correction that moves no parameter by more than this fraction of its range (or
+/// value) ends the corrections.
+pub const CORRECTED: f64 = 1e-4;
 
 /// Scan-and-solve rounds after the first solution, while each lowers the cost.
 pub const MAX_RESCANS: usize = 2;
@@ -90,6 +94,10 @@ pub struct FitOptions {
     pub initial: Option<Vec<f64>>,
     /// The angles (degrees) of the basis's hat nodes (`crate::basis`).
     pub node_deg: Vec<f64>,
+    /// Defect corrections of each refined solution at most: the renderer's image at the
+    /// solution's coatings against the basis's, its difference added to the model and the
+    /// fit repeated, until the parameters stop moving.
+    pub corrections: usize,
 }
 
 impl Default for FitOptions {
@@ -103,6 +111,7 @@ impl Default for FitOptions {
             candidates: 3,
             initial: None,
             node_deg: FIT_NODE_DEG.to_vec(),
+            corrections: 4,
         }
     }
 }
@@ -158,6 +167,9 @@ pub struct Fit {
     pub evaluations: usize,
     /// Renders of the basis: the first pass's, then each candidate's refinements.
     pub renders: usize,
+    /// Defect corrections made (`FitOptions::corrections`), over every refined solution:
+    /// each one render of the ghosts and a solve.
+    pub corrections: usize,
     pub converged: bool,
     pub fit_ms: f64,
     pub basis_ms: f64,
@@ -175,9 +187,13 @@ pub struct Fit {
 
 /// The Gram system of a basis against a target: `L` (lower triangular) and `L⁻¹v` per
 /// channel.
+#[derive(Clone, Debug)]
 struct Reduced {
     l: DMatrix<f64>,
     z: [DVector<f64>; 3],
+    /// `L⁻¹Sᵀd` per channel for the renderer's defect `d` against the basis at the last
+    /// correction's coatings (zero before the first): the model is `S(c + M⁻¹Sᵀd)`.
+    offset: [Vec<f64>; 3],
     /// `yᵀy − ‖z‖²` per channel: the squared residual no coefficients can remove.
     floor: f64,
     pixels: usize,
@@ -203,6 +219,17 @@ impl Reduced {
             out[2][i] = d;
         }
         out
+    }
+
+    /// `Lᵀc` plus the defect's offset: the model's coefficients in the reduced space.
+    fn model(&self, c: &[[f64; 3]]) -> [Vec<f64>; 3] {
+        let mut lc = self.lt_times(c);
+        for (lc, o) in lc.iter_mut().zip(&self.offset) {
+            for (a, b) in lc.iter_mut().zip(o) {
+                *a += b;
+            }
+        }
+        lc
     }
 
     /// The residuals `g Lᵀc − L⁻¹v`, channel after channel, from `lc = Lᵀc`.
@@ -237,6 +264,32 @@ impl Reduced {
     }
 }
 
+/// `Sᵀy` per channel: each band image's product with `y` over the counted pixels.
+fn project(basis: &Basis, mask: &[bool], y: &[[f32; 3]]) -> [DVector<f64>; 3] {
+    let w = basis.frame.width;
+    let bands: Vec<&crate::basis::BandImage> =
+        basis.ghosts.iter().flat_map(|g| g.bands.iter()).collect();
+    let sums: Vec<[f64; 3]> = bands
+        .par_iter()
+        .map(|a| {
+            let mut s = [0.0; 3];
+            for yy in a.y0..a.y0 + a.h {
+                for x in a.x0..a.x0 + a.w {
+                    let i = yy * w + x;
+                    if mask[i] {
+                        let b = f64::from(a.pixels[(yy - a.y0) * a.w + (x - a.x0)]);
+                        for (s, &c) in s.iter_mut().zip(&y[i]) {
+                            *s += b * f64::from(c);
+                        }
+                    }
+                }
+            }
+            s
+        })
+        .collect();
+    std::array::from_fn(|ch| DVector::from_iterator(bands.len(), sums.iter().map(|s| s[ch])))
+}
+
 fn reduce(basis: &Basis, target: &Target) -> Result<Reduced, CoatingError> {
     let bands: Vec<&crate::basis::BandImage> =
         basis.ghosts.iter().flat_map(|g| g.bands.iter()).collect();
@@ -266,23 +319,7 @@ fn reduce(basis: &Basis, target: &Target) -> Result<Reduced, CoatingError> {
         })
         .collect();
     let m = DMatrix::from_fn(n, n, |i, j| rows[i][j]);
-    let v: [DVector<f64>; 3] = std::array::from_fn(|ch| {
-        DVector::from_iterator(
-            n,
-            bands.iter().map(|a| {
-                let mut s = 0.0;
-                for y in a.y0..a.y0 + a.h {
-                    for x in a.x0..a.x0 + a.w {
-                        if mask[y * w + x] {
-                            s += f64::from(a.at(x, y))
-                                * f64::from(target.image.pixels[y * w + x][ch]);
-                        }
-                    }
-                }
-                s
-            }),
-        )
-    });
+    let v = project(basis, mask, &target.image.pixels);
     let yy: f64 = target
         .image
         .pixels
@@ -315,6 +352,7 @@ fn reduce(basis: &Basis, target: &Target) -> Result<Reduced, CoatingError> {
     });
     let floor = yy - z.iter().map(|z| z.norm_squared()).sum::<f64>();
     Ok(Reduced {
+        offset: std::array::from_fn(|_| vec![0.0; n]),
         l,
         z,
         floor: floor.max(0.0),
@@ -355,7 +393,7 @@ impl Evaluator<'_> {
 
     /// The residuals of colours `c` (in the basis's order) under gains `g`.
     fn residuals_of(&self, c: &[[f64; 3]], g: [f64; 3]) -> Vec<f64> {
-        self.reduced.residuals(&self.reduced.lt_times(c), g)
+        self.reduced.residuals(&self.reduced.model(c), g)
     }
 
     /// Half the squared residual at `p` with the gains that fit best there.
@@ -390,7 +428,7 @@ impl Evaluator<'_> {
     /// Half the squared residual of colours `c` with the gains that fit best for them
     /// (written into `p`'s gains).
     fn cost_of_colours(&self, c: &[[f64; 3]], p: &mut [f64]) -> f64 {
-        let lc = self.reduced.lt_times(c);
+        let lc = self.reduced.model(c);
         let g = if self.fit_gains {
             let g = self.reduced.best_gains(&lc);
             let k = self.model.len();
@@ -471,7 +509,7 @@ impl Evaluator<'_> {
 
     /// Per channel, the gains that fit best for colours `c`.
     fn best_gains_of(&self, c: &[[f64; 3]]) -> [f64; 3] {
-        self.reduced.best_gains(&self.reduced.lt_times(c))
+        self.reduced.best_gains(&self.reduced.model(c))
     }
 }
 
@@ -492,7 +530,7 @@ impl Residuals for Evaluator<'_> {
         let n = self.reduced.z[0].len();
         let lc = if self.fit_gains {
             let refs: Vec<&SurfaceTerms> = terms.iter().collect();
-            Some(self.reduced.lt_times(&self.bins.colours_of(&refs, sensor)))
+            Some(self.reduced.model(&self.bins.colours_of(&refs, sensor)))
         } else {
             None
         };
@@ -518,7 +556,7 @@ impl Residuals for Evaluator<'_> {
                     let mut q = p.to_vec();
                     q[j] += d;
                     let c = self.colours_moved(&system, &terms, s, &q);
-                    self.reduced.residuals(&self.reduced.lt_times(&c), g)
+                    self.reduced.residuals(&self.reduced.model(&c), g)
                 };
                 let (a, b) = (moved(h), moved(-h));
                 a.iter().zip(&b).map(|(a, b)| (a - b) / (2.0 * h)).collect()
@@ -527,6 +565,76 @@ impl Residuals for Evaluator<'_> {
         let jac = DMatrix::from_fn(3 * n, p.len(), |i, j| columns[j][i]);
         Some((jac, 2 * k))
     }
+}
+
+/// Evaluations and renders a stage made.
+#[derive(Clone, Copy, Debug, Default)]
+struct Counts {
+    evaluations: usize,
+    renders: usize,
+}
+
+/// Corrects `found` for the basis's defect (`FitOptions::corrections` times at most): renders
+/// the ghosts at its coatings ([`render_ghosts`]), takes the difference `d` from the basis's
+/// image there into the model as `S(c + M⁻¹Sᵀd)` (its part the band images span), and solves
+/// again from it; stops when no parameter moves by more than [`CORRECTED`] of its range (or
+/// value). The fixed point is where the renderer's own image, not the basis's, fits best, as
+/// far as the basis's Jacobian leads there.
+fn correct<'a>(
+    mut ev: Evaluator<'a>,
+    aperture: &Aperture,
+    light: &ghost_raytrace::scene::LightSpec,
+    target: &Target,
+    bounds: &[Bound],
+    options: &FitOptions,
+    mut found: Minimum,
+) -> Result<(Evaluator<'a>, Minimum, Counts), CoatingError> {
+    let mut counts = Counts::default();
+    let k = ev.model.len();
+    for _ in 0..options.corrections {
+        let system = ev.model.apply(&found.params[..k]);
+        let rendered =
+            render_ghosts(&system, aperture, ev.basis.frame, light, options.quality)?.image;
+        counts.renders += 1;
+        let modelled = model_image(ev.basis, &ev.bins.colours(&system), [1.0; 3]);
+        let defect: Vec<[f32; 3]> = rendered
+            .pixels
+            .iter()
+            .zip(&modelled.pixels)
+            .map(|(r, m)| std::array::from_fn(|ch| r[ch] - m[ch]))
+            .collect();
+        let sd = project(ev.basis, &target.mask, &defect);
+        for (o, sd) in ev.reduced.offset.iter_mut().zip(&sd) {
+            *o = ev
+                .reduced
+                .l
+                .solve_lower_triangular(sd)
+                .ok_or(CoatingError::Colours)?
+                .iter()
+                .copied()
+                .collect();
+        }
+        let again = minimise(&ev, &found.params, bounds);
+        counts.evaluations += again.evaluations;
+        let moved = again
+            .params
+            .iter()
+            .zip(&found.params)
+            .zip(bounds)
+            .map(|((a, b), bd)| {
+                let scale = match bd {
+                    Bound::Range(lo, hi) => hi - lo,
+                    Bound::Positive => a.abs().max(b.abs()).max(1e-12),
+                };
+                (a - b).abs() / scale
+            })
+            .fold(0.0, f64::max);
+        found = again;
+        if moved <= CORRECTED {
+            break;
+        }
+    }
+    Ok((ev, found, counts))
 }
 
 /// Up to `k` of `found` (best first) that differ: each more than 2% of some parameter's range
@@ -611,6 +719,7 @@ pub fn fit(
     }
     let scan = options.initial.is_none();
     let (mut evaluations, mut fit_ms, mut basis_ms, mut renders) = (0, 0.0, 0.0, 0);
+    let mut corrections = 0;
     // One pass: the basis rendered with `at`'s coatings (the lens's own without), then the
     // solver from `starts` (the structured ones scanned first), then rescans from the best.
     // Returns every solution found, best first, with the pass's basis.
@@ -700,30 +809,55 @@ pub fn fit(
     let (basis0, bins0, reduced0, found0) =
         pass(options.initial.as_ref(), &first_starts, structured)?;
     let candidates = distinct(&found0, &bounds, options.candidates.max(1));
-    let mut last: Option<(Basis, Reweighter, Reduced, Minimum)> = None;
+    // The refined solutions (with one pass, the first pass's distinct best on its basis),
+    // each then corrected for its basis's defect; the best corrected one kept.
+    let mut bases: Vec<Basis> = Vec::new();
+    let mut refined: Vec<(usize, Reweighter, Reduced, Minimum)> = Vec::new();
     if options.passes <= 1 {
-        last = Some((basis0, bins0, reduced0, found0[0].clone()));
+        bases.push(basis0);
+        for c in candidates {
+            refined.push((0, bins0.clone(), reduced0.clone(), c));
+        }
     } else {
         drop((basis0, bins0, reduced0));
         for c in candidates {
             let mut current = c;
-            let mut refined = None;
+            let mut last = None;
             for _ in 1..options.passes {
                 let start = current.params.clone();
                 let (basis, bins, reduced, found) =
                     pass(Some(&start), &|_| vec![start.clone()], 0)?;
                 current = found[0].clone();
-                refined = Some((basis, bins, reduced, current.clone()));
+                last = Some((basis, bins, reduced, current.clone()));
             }
-            if let Some(r) = refined
-                && last.as_ref().is_none_or(|l| r.3.cost < l.3.cost)
-            {
-                last = Some(r);
+            if let Some((basis, bins, reduced, found)) = last {
+                bases.push(basis);
+                refined.push((bases.len() - 1, bins, reduced, found));
             }
         }
     }
+    let mut last: Option<(usize, Reweighter, Reduced, Minimum)> = None;
+    for (b, bins, reduced, found) in refined {
+        let t0 = std::time::Instant::now();
+        let ev = Evaluator {
+            model,
+            basis: &bases[b],
+            bins,
+            reduced,
+            fit_gains: options.fit_gains,
+        };
+        let (ev, found, counts) = correct(ev, aperture, light, target, &bounds, options, found)?;
+        evaluations += counts.evaluations;
+        corrections += counts.renders;
+        fit_ms += t0.elapsed().as_secs_f64() * 1e3;
+        let Evaluator { bins, reduced, .. } = ev;
+        if last.as_ref().is_none_or(|l| found.cost < l.3.cost) {
+            last = Some((b, bins, reduced, found));
+        }
+    }
     let converged = last.as_ref().is_some_and(|l| l.3.converged);
-    let (basis, bins, reduced, found) = last.expect("at least one pass");
+    let (b, bins, reduced, found) = last.expect("at least one pass");
+    let basis = bases.swap_remove(b);
     let p = found.params;
     let ev = Evaluator {
         model,
@@ -740,27 +874,40 @@ pub fn fit(
         k += 1;
     }
     let evaluations_per_s = k as f64 / t.elapsed().as_secs_f64();
+    // The renderer's image and ghost energies at the solution, when it was corrected by them.
+    let rendered = if options.corrections > 0 {
+        let system = model.apply(&p[..model.len()]);
+        Some(render_ghosts(
+            &system,
+            aperture,
+            basis.frame,
+            light,
+            options.quality,
+        )?)
+    } else {
+        None
+    };
     summarise(
         &ev,
         &p,
         &bounds,
         target,
-        evaluations,
-        renders,
-        converged,
+        rendered,
+        (evaluations, renders, corrections, converged),
         (fit_ms, basis_ms, evaluations_per_s),
     )
 }
 
-#[allow(clippy::too_many_arguments)]
+/// The fit's report at `p`. With `rendered` (the renderer's image and ghost energies at `p`'s
+/// coatings, gains 1) the fitted image and the ghosts' energies are the renderer's, else the
+/// basis's.
 fn summarise(
     ev: &Evaluator<'_>,
     p: &[f64],
     bounds: &[Bound],
     target: &Target,
-    evaluations: usize,
-    renders: usize,
-    converged: bool,
+    rendered: Option<Rendered>,
+    (evaluations, renders, corrections, converged): (usize, usize, usize, bool),
     (fit_ms, basis_ms, evaluations_per_s): (f64, f64, f64),
 ) -> Result<Fit, CoatingError> {
     let model = ev.model;
@@ -832,7 +979,26 @@ fn summarise(
     // Ghost energies and their errors (the gradient by central differences).
     let gains = ev.gains(p);
     let colours = ev.colours(p).ok_or(CoatingError::Colours)?;
-    let energies = ghost_energies(ev.basis, &colours, gains);
+    let mut energies = ghost_energies(ev.basis, &colours, gains);
+    let image = match rendered {
+        Some(Rendered {
+            mut image,
+            energies: rendered_energies,
+        }) => {
+            for (e, g) in energies.iter_mut().zip(&ev.basis.ghosts) {
+                if let Some((_, r)) = rendered_energies.iter().find(|(path, _)| *path == g.path) {
+                    *e = std::array::from_fn(|ch| r[ch] * gains[ch]);
+                }
+            }
+            for px in image.pixels.iter_mut() {
+                for (c, g) in px.iter_mut().zip(gains) {
+                    *c *= g as f32;
+                }
+            }
+            image
+        }
+        None => model_image(ev.basis, &colours, gains),
+    };
     let total = |q: &[f64]| -> Vec<f64> {
         match ev.colours(q) {
             Some(c) => ghost_energies(ev.basis, &c, ev.gains(q))
@@ -843,7 +1009,6 @@ fn summarise(
         }
     };
     let grad = jacobian_at(&total, p, bounds);
-    let image = model_image(ev.basis, &colours, gains);
     let residual_of = residual_per_ghost(ev.basis, &colours, gains, &image, target);
     let ghosts = ev
         .basis
@@ -896,6 +1061,7 @@ fn summarise(
         band_images: ev.basis.band_count(),
         evaluations,
         renders,
+        corrections,
         converged,
         fit_ms,
         basis_ms,

@@ -93,6 +93,12 @@ pub struct FitArgs {
     /// by surface (more: slower, less likely to stop in a wrong valley).
     #[arg(long, default_value_t = FitOptions::default().spread_starts)]
     pub spread_starts: usize,
+
+    /// Defect corrections per solution at most: the ghost renderer's image at the solution's
+    /// coatings against the basis's, the difference added to the model and the fit repeated
+    /// (0: the basis alone)
+    #[arg(long, default_value_t = FitOptions::default().corrections)]
+    pub corrections: usize,
     #[arg(long, default_value_t = Quality::Default)]
     pub quality: Quality,
     /// Film width (mm) the image spans (default: the lens file's).
@@ -196,6 +202,7 @@ pub fn run(args: &FitArgs, quiet: bool) -> Result<()> {
         fit_gains: !args.no_gains,
         passes: args.passes.max(1),
         spread_starts: args.spread_starts,
+        corrections: args.corrections,
         ..FitOptions::default()
     };
     if !quiet && !args.json {
@@ -402,7 +409,7 @@ fn print_report(r: &FitReport<'_>) {
         r.light.phi_deg
     );
     println!(
-        "relative RMSE {:.4}; {} band images; {} evaluations in {:.0} ms ({:.0}/s); basis {:.0} ms over {} renders{}",
+        "relative RMSE {:.4}; {} band images; {} evaluations in {:.0} ms ({:.0}/s); basis {:.0} ms over {} renders; {} corrections{}",
         f.relative_rmse,
         f.band_images,
         f.evaluations,
@@ -410,6 +417,7 @@ fn print_report(r: &FitReport<'_>) {
         f.evaluations_per_s,
         f.basis_ms,
         f.renders,
+        f.corrections,
         if f.converged { "" } else { " (not converged)" }
     );
     println!("\n{:<28} {:>12} {:>12}", "parameter", "value", "σ");
