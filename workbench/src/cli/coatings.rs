@@ -239,10 +239,11 @@ fn side_by_side(a: &HdrImage, b: &HdrImage) -> HdrImage {
 fn print_report(r: &Report<'_>) {
     let c = r.choice;
     println!(
-        "{}: objective {:?} over {} light angles: {:.4e} with MgF₂ everywhere → {:.4e} ({:.2}× less)",
+        "{}: objective {:?} over {} light angle{}: {:.4e} with MgF₂ everywhere → {:.4e} ({:.2}× less)",
         r.lens,
         r.objective,
         r.lights.len(),
+        if r.lights.len() == 1 { "" } else { "s" },
         c.before.objective,
         c.after.objective,
         c.factor
