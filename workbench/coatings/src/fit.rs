@@ -616,19 +616,7 @@ fn correct<'a>(
         }
         let again = minimise(&ev, &found.params, bounds);
         counts.evaluations += again.evaluations;
-        let moved = again
-            .params
-            .iter()
-            .zip(&found.params)
-            .zip(bounds)
-            .map(|((a, b), bd)| {
-                let scale = match bd {
-                    Bound::Range(lo, hi) => hi - lo,
-                    Bound::Positive => a.abs().max(b.abs()).max(1e-12),
-                };
-                (a - b).abs() / scale
-            })
-            .fold(0.0, f64::max);
+        let moved = largest_move(&again.params, &found.params, bounds);
         found = again;
         if moved <= CORRECTED {
             break;
@@ -637,24 +625,28 @@ fn correct<'a>(
     Ok((ev, found, counts))
 }
 
+/// The largest difference between parameters `a` and `b`, each over its bound's range (or
+/// the larger of the two values for a positive one).
+fn largest_move(a: &[f64], b: &[f64], bounds: &[Bound]) -> f64 {
+    a.iter()
+        .zip(b)
+        .zip(bounds)
+        .map(|((a, b), bd)| {
+            let scale = match bd {
+                Bound::Range(lo, hi) => hi - lo,
+                Bound::Positive => a.abs().max(b.abs()).max(1e-12),
+            };
+            (a - b).abs() / scale
+        })
+        .fold(0.0, f64::max)
+}
+
 /// Up to `k` of `found` (best first) that differ: each more than 2% of some parameter's range
 /// (or value) from every one kept before it.
 fn distinct(found: &[Minimum], bounds: &[Bound], k: usize) -> Vec<Minimum> {
     let mut kept: Vec<Minimum> = Vec::new();
     for m in found {
-        let differs = |o: &Minimum| {
-            m.params
-                .iter()
-                .zip(&o.params)
-                .zip(bounds)
-                .any(|((a, b), bd)| {
-                    let scale = match bd {
-                        Bound::Range(lo, hi) => hi - lo,
-                        Bound::Positive => a.abs().max(b.abs()).max(1e-12),
-                    };
-                    (a - b).abs() > 0.02 * scale
-                })
-        };
+        let differs = |o: &Minimum| largest_move(&m.params, &o.params, bounds) > 0.02;
         if kept.iter().all(differs) {
             kept.push(m.clone());
             if kept.len() == k {

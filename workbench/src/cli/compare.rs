@@ -530,4 +530,33 @@ mod tests {
             Path::new("a/out-diff.png")
         );
     }
+
+    /// The table names what drew the plugins' meshes, with the GPU's adapter (what
+    /// workbench/tests/plugins.rs's GPU comparison reports in JSON).
+    #[test]
+    fn the_table_says_which_backend_drew_the_meshes() {
+        let report = CompareReport {
+            lens: "heliar-tronnier".into(),
+            width: 64,
+            height: 36,
+            runs: 1,
+            reference_ms: None,
+            output: "cmp.exr".into(),
+            difference_output: None,
+            backend: BackendReport {
+                backend: "gpu".into(),
+                adapter: Some("llvmpipe".into()),
+                driver: Some("Mesa".into()),
+                api: Some("Vulkan".into()),
+                software_adapter: true,
+                ..BackendReport::default()
+            },
+            algorithms: Vec::new(),
+        };
+        let t = text(&report);
+        assert!(
+            t.contains("plugin meshes drawn by: gpu on llvmpipe (Mesa, Vulkan, software)\n"),
+            "{t}"
+        );
+    }
 }
