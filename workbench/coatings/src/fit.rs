@@ -15,8 +15,12 @@
 //! it starts in). The first pass's best distinct solutions (`FitOptions::candidates`) are each
 //! refined: the basis rendered again with the solution's coatings and the fit repeated from it
 //! (`FitOptions::passes`), so each is judged under a basis of its own coatings, where the
-//! basis's approximations (`crate::basis`) matter least; the best refined one is kept. Uncertainties come from the Jacobian there: `cov = s² (JᵀJ)⁺` with `s²` the
-//! residual variance per pixel channel; directions `JᵀJ` does not see (singular values under
+//! basis's approximations (`crate::basis`) matter least. Each refined solution is then
+//! corrected for what its basis leaves out (`correct`): the ghost renderer's image at its
+//! coatings, its difference from the basis's taken into the model, and the fit solved again
+//! until the parameters stop moving; the best corrected one is kept, and its image and ghost
+//! energies are the renderer's. Uncertainties come from the Jacobian there:
+//! `cov = s² (JᵀJ)⁺` with `s²` the residual variance per pixel channel; directions `JᵀJ` does not see (singular values under
 //! [`NULL_RCOND`] of the largest, in parameters scaled by their ranges) are reported as not
 //! constrained, with the parameters they mix.
 
@@ -232,7 +236,8 @@ impl Reduced {
         lc
     }
 
-    /// The residuals `g Lᵀc − L⁻¹v`, channel after channel, from `lc = Lᵀc`.
+    /// The residuals `g·lc − L⁻¹v`, channel after channel, from the model's coefficients
+    /// `lc` ([`Reduced::model`]).
     fn residuals(&self, lc: &[Vec<f64>; 3], g: [f64; 3]) -> Vec<f64> {
         let mut r = Vec::with_capacity(3 * lc[0].len());
         for ch in 0..3 {
@@ -246,7 +251,8 @@ impl Reduced {
         r
     }
 
-    /// Per channel, the gain that fits best for `lc = Lᵀc` (linear least squares).
+    /// Per channel, the gain that fits best for the model's coefficients `lc` (linear least
+    /// squares).
     fn best_gains(&self, lc: &[Vec<f64>; 3]) -> [f64; 3] {
         std::array::from_fn(|ch| {
             let num: f64 = lc[ch]
@@ -482,7 +488,7 @@ impl Evaluator<'_> {
                         .collect();
                 }
                 // Only this surface's terms change across its grid.
-                let system = self.model.apply(&p);
+                let system = self.model.apply(&p[..self.model.len()]);
                 let terms = self.bins.terms(&system);
                 let best = grid
                     .par_iter()

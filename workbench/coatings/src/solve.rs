@@ -1,6 +1,6 @@
 //! Bounded nonlinear least squares: MINPACK's Levenberg–Marquardt (the `levenberg-marquardt`
 //! crate) on parameters mapped into their bounds, with the Jacobian by finite differences
-//! (forward differences, its columns computed in parallel).
+//! (central differences, its columns computed in parallel).
 //!
 //! A parameter bounded to `[lo, hi]` is `lo + (hi − lo)(1 + sin u)/2` of a free `u` (the
 //! mapping MINUIT uses); a positive one is `e^u`. The solver sees only `u`. A problem that
