@@ -10,10 +10,12 @@
 //! [`NODE_DEG`] for the choice, [`FIT_NODE_DEG`] for the fit: piecewise linear in `cos² θ`, one
 //! at a node and zero at the next), their sum being the ghost's image with both reflectances
 //! replaced by their interpolation between the nodes.
-//! Divided by the path's transmission at normal incidence at the band's centre, each such
-//! image times `Σ w(λ) T(λ) R₁(θᵢ, λ) R₂(θⱼ, λ)` over the band's bin (the light's weights,
-//! the path's normal transmission and the two reflectances at the pair's nodes, in 5 nm
-//! cells: `crate::reweight`) is the ghost's image under other coatings. What is left out is
+//! Divided by the path's transmission at normal incidence at the band's centre `λc`, each
+//! such image times `R₁(θᵢ, λc) R₂(θⱼ, λc) / (R₁(0, λc) R₂(0, λc)) · Σ w(λ) T(λ) R₁(0, λ)
+//! R₂(0, λ)` over the band's bin (the reflectances at the pair's nodes relative to normal
+//! incidence where the band was traced, times the light's weights and the path's throughput
+//! at normal incidence in 5 nm cells, as the renderer colours a band: `crate::reweight`) is
+//! the ghost's image under other coatings. What is left out is
 //! how the transmittances vary with the angle, which moves a ghost's light by a fraction of
 //! the surfaces' reflectance changes; at the coatings the basis is rendered with, the
 //! interpolation between the nodes is what is left. [`Basis::render`] renders the images once (every ghost
@@ -40,8 +42,8 @@ use crate::reweight::transmission;
 pub const NODE_DEG: [f64; 7] = [0.0, 10.0, 20.0, 30.0, 40.0, 55.0, 90.0];
 
 /// The fit's nodes (`crate::fit`): 8° apart to 40°. Linear interpolation of a reflectance
-/// between nodes 10° apart leaves the Cooke triplet's basis 0.5% (relative RMSE) from the
-/// renderer at strongly reflecting single layers; between these, 0.25%, for 30% more images.
+/// between nodes 10° apart leaves the Cooke triplet's basis 0.66% (relative RMSE) from the
+/// renderer at strongly reflecting single layers; between these, 0.30%, for 30% more images.
 pub const FIT_NODE_DEG: [f64; 9] = [0.0, 8.0, 16.0, 24.0, 32.0, 40.0, 50.0, 65.0, 90.0];
 
 /// The cosines of nodes at `deg` (increasing from 0 to 90), from normal incidence (1) to

@@ -88,8 +88,8 @@ pub struct FitOptions {
     pub passes: usize,
     /// Starts of the first pass: (index, quarter-wave nm) of every single layer.
     pub starts: Vec<(f64, f64)>,
-    /// Starts spread over the bounds of the coatings' parameters, each solved from without
-    /// the scan (besides `starts`).
+    /// Starts spread over the bounds of the coatings' parameters (besides `starts`); every
+    /// start is scanned surface by surface before it is solved.
     pub spread_starts: usize,
     /// The first pass's distinct best solutions each refined by the later passes.
     pub candidates: usize,
@@ -204,6 +204,17 @@ struct Reduced {
 }
 
 impl Reduced {
+    /// The norm of the defect's offset over the three channels: how far the last correction
+    /// moved the reduced residuals.
+    fn offset_norm(&self) -> f64 {
+        self.offset
+            .iter()
+            .flatten()
+            .map(|v| v * v)
+            .sum::<f64>()
+            .sqrt()
+    }
+
     /// `Lᵀc` for each channel of the colours `c`: one pass over `L`'s columns (its stored
     /// lower triangle only, each column contiguous), the three channels together.
     fn lt_times(&self, c: &[[f64; 3]]) -> [Vec<f64>; 3] {
@@ -719,11 +730,11 @@ pub fn fit(
     let (mut evaluations, mut fit_ms, mut basis_ms, mut renders) = (0, 0.0, 0.0, 0);
     let mut corrections = 0;
     // One pass: the basis rendered with `at`'s coatings (the lens's own without), then the
-    // solver from `starts` (the structured ones scanned first), then rescans from the best.
+    // solver from `starts` (each scanned first when `scan_starts`), then rescans from the best.
     // Returns every solution found, best first, with the pass's basis.
     let mut pass = |at: Option<&Vec<f64>>,
                     starts_of: &dyn Fn(&Evaluator<'_>) -> Vec<Vec<f64>>,
-                    scan_first: usize|
+                    scan_starts: bool|
      -> Result<(Basis, Reweighter, Reduced, Vec<Minimum>), CoatingError> {
         let t0 = std::time::Instant::now();
         let system = match at {
@@ -750,13 +761,8 @@ pub fn fit(
         };
         let mut tried: Vec<Minimum> = starts_of(&ev)
             .into_par_iter()
-            .enumerate()
-            .map(|(i, s)| {
-                let s = if i < scan_first {
-                    ev.scan(s, &bounds)
-                } else {
-                    s
-                };
+            .map(|s| {
+                let s = if scan_starts { ev.scan(s, &bounds) } else { s };
                 minimise(&ev, &s, &bounds)
             })
             .collect();
@@ -803,9 +809,7 @@ pub fn fit(
         starts.extend(spread_starts(model, &bounds, ev, options));
         starts
     };
-    let structured = if scan { options.starts.len() } else { 0 };
-    let (basis0, bins0, reduced0, found0) =
-        pass(options.initial.as_ref(), &first_starts, structured)?;
+    let (basis0, bins0, reduced0, found0) = pass(options.initial.as_ref(), &first_starts, scan)?;
     let candidates = distinct(&found0, &bounds, options.candidates.max(1));
     // The refined solutions (with one pass, the first pass's distinct best on its basis),
     // each then corrected for its basis's defect; the best corrected one kept.
@@ -824,7 +828,7 @@ pub fn fit(
             for _ in 1..options.passes {
                 let start = current.params.clone();
                 let (basis, bins, reduced, found) =
-                    pass(Some(&start), &|_| vec![start.clone()], 0)?;
+                    pass(Some(&start), &|_| vec![start.clone()], false)?;
                 current = found[0].clone();
                 last = Some((basis, bins, reduced, current.clone()));
             }
@@ -834,8 +838,19 @@ pub fn fit(
             }
         }
     }
+    // Corrected best first. A correction moves a solution's residual norm by about its
+    // basis's defect's part in the band images' span (the offset's norm); a solution whose
+    // norm exceeds the best corrected one's by more than twice that defect is left as it is.
+    refined.sort_by(|a, b| a.3.cost.total_cmp(&b.3.cost));
     let mut last: Option<(usize, Reweighter, Reduced, Minimum)> = None;
+    let mut defect = 0.0_f64;
     for (b, bins, reduced, found) in refined {
+        if let Some(l) = &last
+            && options.corrections > 0
+            && (2.0 * found.cost).sqrt() > (2.0 * l.3.cost).sqrt() + 2.0 * defect
+        {
+            continue;
+        }
         let t0 = std::time::Instant::now();
         let ev = Evaluator {
             model,
@@ -845,6 +860,7 @@ pub fn fit(
             fit_gains: options.fit_gains,
         };
         let (ev, found, counts) = correct(ev, aperture, light, target, &bounds, options, found)?;
+        defect = defect.max(ev.reduced.offset_norm());
         evaluations += counts.evaluations;
         corrections += counts.renders;
         fit_ms += t0.elapsed().as_secs_f64() * 1e3;

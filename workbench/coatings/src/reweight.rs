@@ -1,7 +1,9 @@
-//! The colour each band image of a basis takes under a lens's coatings (`crate::basis`):
-//! over the image's bin, in 5 nm cells, the light's linear-sRGB weights times the path's
-//! transmission at normal incidence times its two reflectances at the image's pair of hat
-//! nodes, times the light's intensity.
+//! The colour each band image of a basis takes under a lens's coatings (`crate::basis`), as
+//! the renderer colours a band (`ghost_raytrace::colour`): the path's two reflectances at the
+//! image's pair of hat nodes relative to normal incidence, at the bin's centre where the band
+//! was traced, times, over the bin in 5 nm cells, the light's linear-sRGB weights and the
+//! path's throughput at normal incidence (its transmission and two reflectances), times the
+//! light's intensity.
 
 use flarebench_sdk::color::{SAMPLING_MAX_NM, SAMPLING_MIN_NM, SpectralSampling};
 use flarebench_sdk::ghost::GhostPath;
@@ -41,6 +43,8 @@ struct Recipe {
     ghost: usize,
     cells: Vec<(usize, f64)>,
     hats: (usize, usize),
+    /// Its bin's centre, where its image was traced: an index into `Reweighter::centres`.
+    centre: usize,
 }
 
 /// What turns coatings into the colours of a basis's band images, made once per basis.
@@ -50,6 +54,8 @@ pub struct Reweighter {
     cells: Vec<(f64, [f64; 3])>,
     /// Each cell's media indices (coatings do not change them).
     indices: Vec<Vec<f64>>,
+    /// The bins' centres (where the band images were traced) and the media indices there.
+    centres: Vec<(f64, Vec<f64>)>,
     /// The basis's nodes' cosines.
     nodes: Vec<f64>,
     /// Per surface and direction (forward, backward): the hat nodes some image uses.
@@ -71,9 +77,17 @@ impl Reweighter {
             .collect();
         let width = (SAMPLING_MAX_NM - SAMPLING_MIN_NM) / CELLS as f64;
         let mut recipes = Vec::new();
+        let mut centres: Vec<(f64, Vec<f64>)> = Vec::new();
         for (g, gb) in basis.ghosts.iter().enumerate() {
             for b in &gb.bands {
                 let bin = Bin::new(system, gb.bins, b.bin);
+                let centre = match centres.iter().position(|c| c.0 == bin.centre_nm) {
+                    Some(i) => i,
+                    None => {
+                        centres.push((bin.centre_nm, system.indices(bin.centre_nm)));
+                        centres.len() - 1
+                    }
+                };
                 let cells = (0..CELLS)
                     .filter_map(|k| {
                         let lo = (SAMPLING_MIN_NM + width * k as f64).max(bin.lo_nm);
@@ -86,6 +100,7 @@ impl Reweighter {
                     ghost: g,
                     cells,
                     hats: b.hats,
+                    centre,
                 });
             }
         }
@@ -107,6 +122,7 @@ impl Reweighter {
             used[path.second()][1][r.hats.1] = true;
         }
         Ok(Reweighter {
+            centres,
             nodes: basis.nodes.clone(),
             cells,
             indices,
@@ -151,8 +167,18 @@ impl Reweighter {
                 [1.0 - rf, rf, 1.0 - rb, rb]
             })
             .collect();
+        let at = |forward: bool, c: f64, (l, n): &(f64, Vec<f64>)| {
+            if surface.kind != SurfaceKind::Refracting || n[s] == n[s + 1] {
+                return 0.0;
+            }
+            let (n1, n2) = if forward {
+                (n[s], n[s + 1])
+            } else {
+                (n[s + 1], n[s])
+            };
+            surface.coating.reflectance(n1, n2, c, *l, forward)
+        };
         let refl = std::array::from_fn(|dir| {
-            let forward = dir == 0;
             self.nodes
                 .iter()
                 .zip(&self.used[s][dir])
@@ -160,23 +186,17 @@ impl Reweighter {
                     if !used {
                         return Vec::new();
                     }
-                    (0..CELLS)
-                        .map(|k| {
-                            let n = &indices[k];
-                            let (n1, n2) = if forward {
-                                (n[s], n[s + 1])
-                            } else {
-                                (n[s + 1], n[s])
-                            };
-                            surface
-                                .coating
-                                .reflectance(n1, n2, c, self.cells[k].0, forward)
-                        })
-                        .collect()
+                    self.centres.iter().map(|x| at(dir == 0, c, x)).collect()
                 })
                 .collect()
         });
-        SurfaceTerms { factors, refl }
+        let normal =
+            std::array::from_fn(|dir| self.centres.iter().map(|x| at(dir == 0, 1.0, x)).collect());
+        SurfaceTerms {
+            factors,
+            refl,
+            normal,
+        }
     }
 
     /// Every band image's colour from the surfaces' terms (one per surface, in order).
@@ -196,11 +216,17 @@ impl Reweighter {
             .map(|rec| {
                 let path = self.paths[rec.ghost];
                 let t = &transmissions[rec.ghost];
-                let r1 = &terms[path.first()].refl[0][rec.hats.0];
-                let r2 = &terms[path.second()].refl[1][rec.hats.1];
+                let (a, b) = (&terms[path.first()], &terms[path.second()]);
+                let at_centre = a.normal[0][rec.centre] * b.normal[1][rec.centre];
+                if at_centre.is_nan() || at_centre <= 0.0 {
+                    return [0.0; 3];
+                }
+                let ratio = a.refl[0][rec.hats.0][rec.centre] * b.refl[1][rec.hats.1][rec.centre]
+                    / at_centre;
+                let (f1, f2) = (&a.factors, &b.factors);
                 let mut c = [0.0; 3];
                 for &(k, share) in &rec.cells {
-                    let v = share * t[k] * r1[k] * r2[k];
+                    let v = share * t[k] * f1[k][1] * f2[k][3] * ratio;
                     for (ch, w) in c.iter_mut().zip(self.cells[k].1) {
                         *ch += w * v;
                     }
@@ -217,7 +243,9 @@ impl Reweighter {
 pub struct SurfaceTerms {
     /// `[T forward, R forward, T backward, R backward]` at normal incidence, per cell.
     factors: Vec<[f64; 4]>,
-    /// Reflectance per direction (forward, backward), hat node and cell; empty where no
-    /// ghost of the basis reflects so.
+    /// Reflectance per direction (forward, backward), hat node and bin centre; empty where
+    /// no ghost of the basis reflects so.
     refl: [Vec<Vec<f64>>; 2],
+    /// Reflectance at normal incidence per direction and bin centre.
+    normal: [Vec<f64>; 2],
 }

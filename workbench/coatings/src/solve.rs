@@ -148,7 +148,9 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_> {
     }
 }
 
-/// Minimises `½ Σ f(p)ᵢ²` over `p` within `bounds`, from `start` (clamped into the bounds).
+/// Minimises `½ Σ f(p)ᵢ²` over `p` within `bounds`, from `start` (clamped into the bounds),
+/// with at most 30 × (parameters + 1) evaluations of `f` besides the Jacobian's: a start still
+/// crawling along a valley by then is in one that loses to the fit's other starts.
 pub fn minimise(f: &dyn Residuals, start: &[f64], bounds: &[Bound]) -> Minimum {
     let problem = Problem {
         f,
@@ -160,7 +162,7 @@ pub fn minimise(f: &dyn Residuals, start: &[f64], bounds: &[Bound]) -> Minimum {
         evaluations: 0.into(),
     };
     let (problem, report) = LevenbergMarquardt::new()
-        .with_patience(100)
+        .with_patience(30)
         .with_ftol(1e-10)
         .with_xtol(1e-9)
         .minimize(problem);

@@ -89,8 +89,8 @@ pub struct FitArgs {
     /// refined so).
     #[arg(long, default_value_t = 3)]
     pub passes: usize,
-    /// Starts spread over the parameters' bounds, besides four MgF₂-like ones scanned surface
-    /// by surface (more: slower, less likely to stop in a wrong valley).
+    /// Starts spread over the parameters' bounds, besides four MgF₂-like ones; each start is
+    /// scanned surface by surface (more: slower, less likely to stop in a wrong valley).
     #[arg(long, default_value_t = FitOptions::default().spread_starts)]
     pub spread_starts: usize,
 
