@@ -10,12 +10,10 @@
 //! [`NODE_DEG`] for the choice, [`FIT_NODE_DEG`] for the fit: piecewise linear in `cos² θ`, one
 //! at a node and zero at the next), their sum being the ghost's image with both reflectances
 //! replaced by their interpolation between the nodes.
-//! Divided by the path's transmission at normal incidence at the band's centre `λc`, each
-//! such image times `R₁(θᵢ, λc) R₂(θⱼ, λc) / (R₁(0, λc) R₂(0, λc)) · Σ w(λ) T(λ) R₁(0, λ)
-//! R₂(0, λ)` over the band's bin (the reflectances at the pair's nodes relative to normal
-//! incidence where the band was traced, times the light's weights and the path's throughput
-//! at normal incidence in 5 nm cells, as the renderer colours a band: `crate::reweight`) is
-//! the ghost's image under other coatings. What is left out is
+//! Divided by the path's transmission at normal incidence at the band's centre, each such
+//! image times its colour under other coatings (`crate::reweight`: the two reflectances at the
+//! pair's nodes, with the light's weights and the path's transmission over the band's bin) is
+//! the ghost's image under those coatings. What is left out is
 //! how the transmittances vary with the angle, which moves a ghost's light by a fraction of
 //! the surfaces' reflectance changes; at the coatings the basis is rendered with, the
 //! interpolation between the nodes is what is left. [`Basis::render`] renders the images once (every ghost

@@ -17,7 +17,7 @@ use serde::Serialize;
 use crate::CoatingError;
 use crate::basis::Basis;
 use crate::catalogue::{Coatable, Design, coatable_surfaces};
-use crate::reweight::Reweighter;
+use crate::reweight::{Colouring, Reweighter};
 
 /// What the choice minimises, over the light angles.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -108,7 +108,7 @@ impl Chooser {
             .iter()
             .map(|light| {
                 let basis = Basis::render(&start, aperture, frame, light, quality)?;
-                let reweighter = Reweighter::new(&basis, &start)?;
+                let reweighter = Reweighter::new(&basis, &start, Colouring::Cells)?;
                 Ok(Angle { basis, reweighter })
             })
             .collect::<Result<Vec<_>, CoatingError>>()?;

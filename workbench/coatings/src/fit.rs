@@ -35,7 +35,7 @@ use serde::Serialize;
 use crate::CoatingError;
 use crate::basis::{Basis, FIT_NODE_DEG, Rendered, render_ghosts};
 use crate::model::{CoatingModel, Family, ModelSurface, ghost_energies};
-use crate::reweight::{Reweighter, SurfaceTerms};
+use crate::reweight::{Colouring, Reweighter, SurfaceTerms};
 use crate::solve::{Bound, Minimum, Residuals, jacobian_at, minimise};
 
 /// Singular values of the scaled `JᵀJ` below this fraction of the largest mark directions the
@@ -754,7 +754,7 @@ pub fn fit(
         let t1 = std::time::Instant::now();
         let ev = Evaluator {
             model,
-            bins: Reweighter::new(&basis, &system)?,
+            bins: Reweighter::new(&basis, &system, Colouring::Renderer)?,
             reduced: reduce(&basis, target)?,
             basis: &basis,
             fit_gains: options.fit_gains,

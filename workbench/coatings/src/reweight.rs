@@ -1,9 +1,10 @@
-//! The colour each band image of a basis takes under a lens's coatings (`crate::basis`), as
-//! the renderer colours a band (`ghost_raytrace::colour`): the path's two reflectances at the
-//! image's pair of hat nodes relative to normal incidence, at the bin's centre where the band
-//! was traced, times, over the bin in 5 nm cells, the light's linear-sRGB weights and the
-//! path's throughput at normal incidence (its transmission and two reflectances), times the
-//! light's intensity.
+//! The colour each band image of a basis takes under a lens's coatings (`crate::basis`), times
+//! the light's intensity, in one of two [`Colouring`]s: by cells (over the image's bin in 5 nm
+//! cells, the light's linear-sRGB weights times the path's transmission at normal incidence
+//! times its two reflectances at the image's pair of hat nodes), or as the renderer colours a
+//! band (`ghost_raytrace::colour`: the two reflectances at the hat nodes relative to normal
+//! incidence at the bin's centre, where the band was traced, times, over the bin in 5 nm
+//! cells, the light's weights and the path's throughput at normal incidence).
 
 use flarebench_sdk::color::{SAMPLING_MAX_NM, SAMPLING_MIN_NM, SpectralSampling};
 use flarebench_sdk::ghost::GhostPath;
@@ -37,6 +38,19 @@ pub fn transmission(path: GhostPath, f: &[[f64; 4]], sensor: usize) -> f64 {
     t * f[last + 1..sensor].iter().map(|x| x[0]).product::<f64>()
 }
 
+/// How a basis's band images take their colours.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Colouring {
+    /// Each reflectance at the image's hat nodes in every 5 nm cell of its bin: the physics of
+    /// a band, whatever bins the renderer would trace the coatings at (the choice, which
+    /// weighs coatings far from those the basis was rendered with).
+    Cells,
+    /// As the renderer colours a band: the reflectances at the hat nodes relative to normal
+    /// incidence at the bin's centre, times the spectrum at normal incidence over the bin (the
+    /// fit, which is corrected against the renderer at bases of its own coatings).
+    Renderer,
+}
+
 /// One band image's recipe: its ghost, its cells with their shares of its bin, its hats.
 #[derive(Clone, Debug)]
 struct Recipe {
@@ -52,8 +66,10 @@ struct Recipe {
 pub struct Reweighter {
     /// Each cell's centre and the light's weights there (times its intensity).
     cells: Vec<(f64, [f64; 3])>,
-    /// Each cell's media indices (coatings do not change them).
-    indices: Vec<Vec<f64>>,
+    /// How the band images are coloured.
+    colouring: Colouring,
+    /// Each cell's centre and the media indices there.
+    cell_points: Vec<(f64, Vec<f64>)>,
     /// The bins' centres (where the band images were traced) and the media indices there.
     centres: Vec<(f64, Vec<f64>)>,
     /// The basis's nodes' cosines.
@@ -65,7 +81,11 @@ pub struct Reweighter {
 }
 
 impl Reweighter {
-    pub fn new(basis: &Basis, system: &LensSystem) -> Result<Reweighter, CoatingError> {
+    pub fn new(
+        basis: &Basis,
+        system: &LensSystem,
+        colouring: Colouring,
+    ) -> Result<Reweighter, CoatingError> {
         let light = &basis.light;
         let sampling = SpectralSampling::new(CELLS, light.spectrum)
             .map_err(ghost_raytrace::GhostRenderError::from)?;
@@ -104,11 +124,6 @@ impl Reweighter {
                 });
             }
         }
-        let indices = sampling
-            .wavelengths_nm()
-            .iter()
-            .map(|&l| system.indices(l))
-            .collect();
         let mut used = vec![
             [
                 vec![false; basis.nodes.len()],
@@ -121,11 +136,17 @@ impl Reweighter {
             used[path.first()][0][r.hats.0] = true;
             used[path.second()][1][r.hats.1] = true;
         }
+        let cell_points = sampling
+            .wavelengths_nm()
+            .iter()
+            .map(|&l| (l, system.indices(l)))
+            .collect();
         Ok(Reweighter {
+            colouring,
+            cell_points,
             centres,
             nodes: basis.nodes.clone(),
             cells,
-            indices,
             used,
             paths: basis.ghosts.iter().map(|g| g.path).collect(),
             recipes,
@@ -153,12 +174,11 @@ impl Reweighter {
     /// normal-incidence factors per cell (`colour::surface_factors`, from the held indices)
     /// and, where a ghost reflects there, its reflectances per direction, hat node and cell.
     pub fn surface_terms(&self, s: usize, surface: &Surface) -> SurfaceTerms {
-        let indices = &self.indices;
         let factors = self
-            .cells
+            .cell_points
             .iter()
-            .zip(indices)
-            .map(|(&(l, _), n)| {
+            .map(|(l, n)| {
+                let l = *l;
                 if surface.kind != SurfaceKind::Refracting || n[s] == n[s + 1] {
                     return [1.0, 0.0, 1.0, 0.0];
                 }
@@ -178,6 +198,12 @@ impl Reweighter {
             };
             surface.coating.reflectance(n1, n2, c, *l, forward)
         };
+        // The wavelengths the reflectances at the nodes are taken at: every cell, or the bins'
+        // centres.
+        let points: &[(f64, Vec<f64>)] = match self.colouring {
+            Colouring::Cells => &self.cell_points,
+            Colouring::Renderer => &self.centres,
+        };
         let refl = std::array::from_fn(|dir| {
             self.nodes
                 .iter()
@@ -186,12 +212,14 @@ impl Reweighter {
                     if !used {
                         return Vec::new();
                     }
-                    self.centres.iter().map(|x| at(dir == 0, c, x)).collect()
+                    points.iter().map(|x| at(dir == 0, c, x)).collect()
                 })
                 .collect()
         });
-        let normal =
-            std::array::from_fn(|dir| self.centres.iter().map(|x| at(dir == 0, 1.0, x)).collect());
+        let normal = std::array::from_fn(|dir| match self.colouring {
+            Colouring::Cells => Vec::new(),
+            Colouring::Renderer => self.centres.iter().map(|x| at(dir == 0, 1.0, x)).collect(),
+        });
         SurfaceTerms {
             factors,
             refl,
@@ -217,18 +245,30 @@ impl Reweighter {
                 let path = self.paths[rec.ghost];
                 let t = &transmissions[rec.ghost];
                 let (a, b) = (&terms[path.first()], &terms[path.second()]);
-                let at_centre = a.normal[0][rec.centre] * b.normal[1][rec.centre];
-                if at_centre.is_nan() || at_centre <= 0.0 {
-                    return [0.0; 3];
-                }
-                let ratio = a.refl[0][rec.hats.0][rec.centre] * b.refl[1][rec.hats.1][rec.centre]
-                    / at_centre;
-                let (f1, f2) = (&a.factors, &b.factors);
+                let (r1, r2) = (&a.refl[0][rec.hats.0], &b.refl[1][rec.hats.1]);
                 let mut c = [0.0; 3];
-                for &(k, share) in &rec.cells {
-                    let v = share * t[k] * f1[k][1] * f2[k][3] * ratio;
-                    for (ch, w) in c.iter_mut().zip(self.cells[k].1) {
-                        *ch += w * v;
+                match self.colouring {
+                    Colouring::Cells => {
+                        for &(k, share) in &rec.cells {
+                            let v = share * t[k] * r1[k] * r2[k];
+                            for (ch, w) in c.iter_mut().zip(self.cells[k].1) {
+                                *ch += w * v;
+                            }
+                        }
+                    }
+                    Colouring::Renderer => {
+                        let at_centre = a.normal[0][rec.centre] * b.normal[1][rec.centre];
+                        if at_centre.is_nan() || at_centre <= 0.0 {
+                            return c;
+                        }
+                        let ratio = r1[rec.centre] * r2[rec.centre] / at_centre;
+                        let (f1, f2) = (&a.factors, &b.factors);
+                        for &(k, share) in &rec.cells {
+                            let v = share * t[k] * f1[k][1] * f2[k][3] * ratio;
+                            for (ch, w) in c.iter_mut().zip(self.cells[k].1) {
+                                *ch += w * v;
+                            }
+                        }
                     }
                 }
                 c

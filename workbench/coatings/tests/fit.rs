@@ -5,7 +5,7 @@ use flarebench_coatings::basis::{Basis, FIT_NODE_DEG};
 use flarebench_coatings::catalogue::Design;
 use flarebench_coatings::fit::{FitOptions, Target, fit, model_image};
 use flarebench_coatings::model::{CoatingModel, Family};
-use flarebench_coatings::reweight::Reweighter;
+use flarebench_coatings::reweight::{Colouring, Reweighter};
 use flarebench_sdk::LensSystem;
 use flarebench_sdk::aperture::Aperture;
 use flarebench_sdk::frame::Frame;
@@ -106,7 +106,9 @@ fn fit_basis(system: &LensSystem, frame: Frame, light: &LightSpec) -> (Basis, Ve
         &FIT_NODE_DEG,
     )
     .unwrap();
-    let colours = Reweighter::new(&basis, system).unwrap().colours(system);
+    let colours = Reweighter::new(&basis, system, Colouring::Renderer)
+        .unwrap()
+        .colours(system);
     (basis, colours)
 }
 
@@ -400,7 +402,7 @@ fn reweighted_follows_the_renderer(stem: &str, own_limit: f64, limit: f64) {
                     Quality::Default,
                 )
                 .unwrap();
-                let rw = Reweighter::new(&basis, &a_lens).unwrap();
+                let rw = Reweighter::new(&basis, &a_lens, Colouring::Cells).unwrap();
                 let own = model_image(&basis, &rw.colours(&a_lens), [1.0; 3]);
                 let own_err = own.relative_rmse(&truth(&a_lens, frame, &light)).unwrap();
                 assert!(own_err < own_limit, "{stem}: own coatings {own_err}");
