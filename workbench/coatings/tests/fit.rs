@@ -420,16 +420,22 @@ fn reweighted_follows_the_renderer(stem: &str, own_limit: f64, limit: f64) {
 /// fit's refined passes, each at a basis of its solution's coatings, find the hidden coatings.
 #[test]
 fn the_fit_basis_follows_the_renderer_on_the_cooke_triplet() {
-    let lens = load_lens("cooke-triplet-25mm");
-    let model = CoatingModel::new(&lens, |_| Family::Single).unwrap();
-    let hidden = model.apply(&hidden_params(&model, &mut Rng(2)));
+    let err = fit_basis_error("cooke-triplet-25mm", Family::Single, 2);
+    assert!(err < 0.0035, "{err}");
+}
+
+/// The relative RMSE of the fit's basis of `stem` with hidden coatings of `family` (the
+/// stream `seed`), at those coatings, against the renderer (160 × 107 px, light at 12°).
+fn fit_basis_error(stem: &str, family: Family, seed: u64) -> f64 {
+    let lens = load_lens(stem);
+    let model = CoatingModel::new(&lens, |_| family).unwrap();
+    let hidden = model.apply(&hidden_params(&model, &mut Rng(seed)));
     let frame = Frame::across_film(160, 107, lens.film_width_mm);
     let light = LightSpec::parse("12,30,40").unwrap();
     let (basis, colours) = fit_basis(&hidden, frame, &light);
-    let err = model_image(&basis, &colours, [1.0; 3])
+    model_image(&basis, &colours, [1.0; 3])
         .relative_rmse(&truth(&hidden, frame, &light))
-        .unwrap();
-    assert!(err < 0.0035, "{err}");
+        .unwrap()
 }
 
 /// The fit's basis colours its band images as the renderer colours a band (the reflectances'
@@ -438,15 +444,7 @@ fn the_fit_basis_follows_the_renderer_on_the_cooke_triplet() {
 /// 5 nm instead, 1.39%: a V-coat's angle factor changes fast across a band near its minimum).
 #[test]
 fn the_fit_basis_colours_v_coats_as_the_renderer() {
-    let lens = load_lens("heliar-tronnier");
-    let model = CoatingModel::new(&lens, |_| Family::Layers(Design::VCoat)).unwrap();
-    let hidden = model.apply(&hidden_params(&model, &mut Rng(5)));
-    let frame = Frame::across_film(160, 107, lens.film_width_mm);
-    let light = LightSpec::parse("12,30,40").unwrap();
-    let (basis, colours) = fit_basis(&hidden, frame, &light);
-    let err = model_image(&basis, &colours, [1.0; 3])
-        .relative_rmse(&truth(&hidden, frame, &light))
-        .unwrap();
+    let err = fit_basis_error("heliar-tronnier", Family::Layers(Design::VCoat), 5);
     assert!(err < 0.007, "{err}");
 }
 
@@ -461,5 +459,21 @@ fn heliar_v_coats_are_recovered() {
         "12,30,40",
         &FitOptions::default(),
         Expect::Identified,
+    );
+}
+
+/// V-coats on the Zeiss Tele-Tessar 120 mm (six air–glass surfaces, light at 8°): its image
+/// does not identify them, and the fit says so (the fitted image within 1%, no ghost it calls
+/// constrained off by more than 2%; it calls none constrained).
+#[test]
+#[ignore = "slow tier: 571 band images, 12 scanned starts over three passes with corrections, 70 s; by default the fit's basis on the Heliar's V-coats against the renderer"]
+fn tele_tessar_v_coats_the_image_cannot_identify_are_reported() {
+    recover(
+        "zeiss/zeiss-tele-tessar-120mm-f6.3",
+        Family::Layers(Design::VCoat),
+        7,
+        "8,30,40",
+        &FitOptions::default(),
+        Expect::MaybeUnidentified,
     );
 }
