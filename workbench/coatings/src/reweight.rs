@@ -64,8 +64,8 @@ struct Recipe {
 /// What turns coatings into the colours of a basis's band images, made once per basis.
 #[derive(Clone, Debug)]
 pub struct Reweighter {
-    /// Each cell's centre and the light's weights there (times its intensity).
-    cells: Vec<(f64, [f64; 3])>,
+    /// Each cell's light weights (linear sRGB, times the light's intensity).
+    weights: Vec<[f64; 3]>,
     /// How the band images are coloured.
     colouring: Colouring,
     /// Each cell's centre and the media indices there.
@@ -89,11 +89,10 @@ impl Reweighter {
         let light = &basis.light;
         let sampling = SpectralSampling::new(CELLS, light.spectrum)
             .map_err(ghost_raytrace::GhostRenderError::from)?;
-        let cells = sampling
-            .wavelengths_nm()
+        let weights = sampling
+            .weights()
             .iter()
-            .zip(sampling.weights())
-            .map(|(&l, w)| (l, w.map(|v| f64::from(v) * light.intensity)))
+            .map(|w| w.map(|v| f64::from(v) * light.intensity))
             .collect();
         let width = (SAMPLING_MAX_NM - SAMPLING_MIN_NM) / CELLS as f64;
         let mut recipes = Vec::new();
@@ -146,7 +145,7 @@ impl Reweighter {
             cell_points,
             centres,
             nodes: basis.nodes.clone(),
-            cells,
+            weights,
             used,
             paths: basis.ghosts.iter().map(|g| g.path).collect(),
             recipes,
@@ -172,21 +171,12 @@ impl Reweighter {
 
     /// The terms of `surface`, the lens's surface `s`, under its coating: its
     /// normal-incidence factors per cell (`colour::surface_factors`, from the held indices)
-    /// and, where a ghost reflects there, its reflectances per direction, hat node and cell.
+    /// and, where a ghost reflects there, its reflectances per direction and hat node at each
+    /// cell ([`Colouring::Cells`]) or at each bin's centre, with those at normal incidence
+    /// there ([`Colouring::Renderer`]).
     pub fn surface_terms(&self, s: usize, surface: &Surface) -> SurfaceTerms {
-        let factors = self
-            .cell_points
-            .iter()
-            .map(|(l, n)| {
-                let l = *l;
-                if surface.kind != SurfaceKind::Refracting || n[s] == n[s + 1] {
-                    return [1.0, 0.0, 1.0, 0.0];
-                }
-                let rf = surface.coating.reflectance(n[s], n[s + 1], 1.0, l, true);
-                let rb = surface.coating.reflectance(n[s + 1], n[s], 1.0, l, false);
-                [1.0 - rf, rf, 1.0 - rb, rb]
-            })
-            .collect();
+        // The reflectance going forward or backward at incidence cosine `c`, at a wavelength
+        // and its media indices (none where the surface does not reflect).
         let at = |forward: bool, c: f64, (l, n): &(f64, Vec<f64>)| {
             if surface.kind != SurfaceKind::Refracting || n[s] == n[s + 1] {
                 return 0.0;
@@ -198,6 +188,14 @@ impl Reweighter {
             };
             surface.coating.reflectance(n1, n2, c, *l, forward)
         };
+        let factors = self
+            .cell_points
+            .iter()
+            .map(|x| {
+                let (rf, rb) = (at(true, 1.0, x), at(false, 1.0, x));
+                [1.0 - rf, rf, 1.0 - rb, rb]
+            })
+            .collect();
         // The wavelengths the reflectances at the nodes are taken at: every cell, or the bins'
         // centres.
         let points: &[(f64, Vec<f64>)] = match self.colouring {
@@ -246,29 +244,27 @@ impl Reweighter {
                 let t = &transmissions[rec.ghost];
                 let (a, b) = (&terms[path.first()], &terms[path.second()]);
                 let (r1, r2) = (&a.refl[0][rec.hats.0], &b.refl[1][rec.hats.1]);
-                let mut c = [0.0; 3];
-                match self.colouring {
-                    Colouring::Cells => {
-                        for &(k, share) in &rec.cells {
-                            let v = share * t[k] * r1[k] * r2[k];
-                            for (ch, w) in c.iter_mut().zip(self.cells[k].1) {
-                                *ch += w * v;
-                            }
-                        }
-                    }
+                // The two reflectances in cell `k`: at the nodes there, or at normal incidence
+                // there times the nodes' angle factor at the bin's centre.
+                let ratio = match self.colouring {
+                    Colouring::Cells => 1.0,
                     Colouring::Renderer => {
                         let at_centre = a.normal[0][rec.centre] * b.normal[1][rec.centre];
                         if at_centre.is_nan() || at_centre <= 0.0 {
-                            return c;
+                            return [0.0; 3];
                         }
-                        let ratio = r1[rec.centre] * r2[rec.centre] / at_centre;
-                        let (f1, f2) = (&a.factors, &b.factors);
-                        for &(k, share) in &rec.cells {
-                            let v = share * t[k] * f1[k][1] * f2[k][3] * ratio;
-                            for (ch, w) in c.iter_mut().zip(self.cells[k].1) {
-                                *ch += w * v;
-                            }
-                        }
+                        r1[rec.centre] * r2[rec.centre] / at_centre
+                    }
+                };
+                let reflected = |k: usize| match self.colouring {
+                    Colouring::Cells => r1[k] * r2[k],
+                    Colouring::Renderer => a.factors[k][1] * b.factors[k][3] * ratio,
+                };
+                let mut c = [0.0; 3];
+                for &(k, share) in &rec.cells {
+                    let v = share * t[k] * reflected(k);
+                    for (ch, w) in c.iter_mut().zip(self.weights[k]) {
+                        *ch += w * v;
                     }
                 }
                 c
@@ -283,9 +279,10 @@ impl Reweighter {
 pub struct SurfaceTerms {
     /// `[T forward, R forward, T backward, R backward]` at normal incidence, per cell.
     factors: Vec<[f64; 4]>,
-    /// Reflectance per direction (forward, backward), hat node and bin centre; empty where
-    /// no ghost of the basis reflects so.
+    /// Reflectance per direction (forward, backward), hat node and cell or bin centre (by the
+    /// colouring); empty where no ghost of the basis reflects so.
     refl: [Vec<Vec<f64>>; 2],
-    /// Reflectance at normal incidence per direction and bin centre.
+    /// Reflectance at normal incidence per direction and bin centre ([`Colouring::Renderer`];
+    /// empty by cells).
     normal: [Vec<f64>; 2],
 }
